@@ -1,0 +1,30 @@
+# Two commands do everything on a fresh machine: `make demo` and `make test`.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed-stamp
+
+.PHONY: setup demo test lint clean
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test,notebooks]'
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+demo: setup
+	$(VENV)/bin/gimwatch demo -o demo-output
+
+test: setup
+	$(PY) -W error -c "import gimwatch"
+	$(VENV)/bin/ruff check gimwatch tests
+	$(PY) -m pytest -n 2 --nbmake tests notebooks
+
+lint: setup
+	$(VENV)/bin/ruff check gimwatch tests
+	$(VENV)/bin/ruff format --check gimwatch tests
+
+clean:
+	rm -rf $(VENV) demo-output .pytest_cache

@@ -1,0 +1,73 @@
+"""gimwatch: watch the conditioning of a robot's generalized inertia matrix (GIM).
+
+Importing gimwatch does no work: no robot is loaded and nothing is written.
+"""
+
+from gimwatch._version import __version__
+from gimwatch.analysis import GimAnalysis, analyze_configuration
+from gimwatch.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
+from gimwatch.conditioning import (
+    ScaledDiagonalRatio,
+    check_gim,
+    condition_estimate_1norm,
+    condition_number,
+    diagonal_ratio,
+    eigenvalues,
+    ldlt_pivots,
+    pivot_ratio_backward,
+    pivot_ratio_forward,
+    udut_pivots,
+)
+from gimwatch.errors import (
+    ConditioningError,
+    GimwatchError,
+    IllConditionedWarning,
+    InputError,
+    RobotError,
+    SceneError,
+    SimulationError,
+    URDFError,
+)
+from gimwatch.inertia import gim, gim_diagonal
+from gimwatch.robots import (
+    Robot,
+    example_robot_names,
+    load_robot,
+    neutral_configuration,
+    random_configurations,
+)
+
+__all__ = [
+    "ChainSpec",
+    "ConditioningError",
+    "GimAnalysis",
+    "GimwatchError",
+    "IllConditionedWarning",
+    "InputError",
+    "Robot",
+    "RobotError",
+    "ScaledDiagonalRatio",
+    "SceneError",
+    "SimulationError",
+    "URDFError",
+    "__version__",
+    "analyze_configuration",
+    "chain_spec",
+    "check_gim",
+    "condition_estimate_1norm",
+    "condition_number",
+    "diagonal_ratio",
+    "eigenvalues",
+    "example_robot_names",
+    "generate_chain_urdf",
+    "gim",
+    "gim_diagonal",
+    "ldlt_pivots",
+    "load_robot",
+    "neutral_configuration",
+    "pivot_ratio_backward",
+    "pivot_ratio_forward",
+    "random_configurations",
+    "udut_pivots",
+    "write_chain_urdf",
+]

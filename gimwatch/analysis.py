@@ -1,0 +1,95 @@
+"""One-shot conditioning analysis of a robot's GIM at given configurations."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from gimwatch.conditioning import (
+    check_gim,
+    diagonal_ratio,
+    eigenvalues,
+    ldlt_pivots,
+    udut_pivots,
+)
+from gimwatch.errors import ConditioningError
+from gimwatch.inertia import gim
+from gimwatch.robots import Robot, as_configuration
+
+__all__ = ["GimAnalysis", "analyze_configuration"]
+
+
+@dataclass(frozen=True)
+class GimAnalysis:
+    """Conditioning of M(q) at one configuration.
+
+    Attributes:
+        robot: Robot name.
+        nv: Size of the GIM.
+        q: The configuration (length nq).
+        kappa: κ₂ = λmax/λmin.
+        diagonal_ratio: δ = max M_ii / min M_ii.
+        pivot_ratio_forward: max/min LDLᵀ pivot (elimination from the root).
+        pivot_ratio_backward: max/min UDUᵀ pivot (elimination from the tips).
+        lambda_min: Smallest eigenvalue.
+        lambda_max: Largest eigenvalue.
+        eigenvalues: All eigenvalues, ascending.
+        diagonal: diag M, in Pinocchio's coordinate order.
+        max_diagonal_dof: Name of the coordinate holding the largest diagonal entry.
+        min_diagonal_dof: Name of the coordinate holding the smallest diagonal entry.
+    """
+
+    robot: str
+    nv: int
+    q: tuple[float, ...]
+    kappa: float
+    diagonal_ratio: float
+    pivot_ratio_forward: float
+    pivot_ratio_backward: float
+    lambda_min: float
+    lambda_max: float
+    eigenvalues: tuple[float, ...]
+    diagonal: tuple[float, ...]
+    max_diagonal_dof: str
+    min_diagonal_dof: str
+
+    def to_dict(self) -> dict:
+        """A JSON-ready dict (lists for the vectors)."""
+        record = asdict(self)
+        for key in ("q", "eigenvalues", "diagonal"):
+            record[key] = list(record[key])
+        return record
+
+
+def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAnalysis:
+    """Compute κ, δ, both pivot ratios and the spectrum of M(q)."""
+    q = as_configuration(robot, q)
+    M = gim(robot, q, data=data)
+    massless = [robot.dof_names[k] for k in np.flatnonzero(~(np.diag(M) > 0))]
+    if massless:
+        raise ConditioningError(
+            f"M(q) of {robot.name} is singular: {len(massless)} coordinate(s) move no mass "
+            f"({', '.join(massless[:4])}{', ...' if len(massless) > 4 else ''}); "
+            "give the links they move an <inertial>"
+        )
+    M = check_gim(M)
+    values = eigenvalues(M)
+    diag = np.diag(M)
+    forward, backward = ldlt_pivots(M), udut_pivots(M)
+    return GimAnalysis(
+        robot=robot.name,
+        nv=robot.nv,
+        q=tuple(float(x) for x in q),
+        kappa=float(values[-1] / values[0]),
+        diagonal_ratio=diagonal_ratio(diag),
+        pivot_ratio_forward=float(forward.max() / forward.min()),
+        pivot_ratio_backward=float(backward.max() / backward.min()),
+        lambda_min=float(values[0]),
+        lambda_max=float(values[-1]),
+        eigenvalues=tuple(float(x) for x in values),
+        diagonal=tuple(float(x) for x in diag),
+        max_diagonal_dof=robot.dof_names[int(np.argmax(diag))],
+        min_diagonal_dof=robot.dof_names[int(np.argmin(diag))],
+    )

@@ -1,0 +1,52 @@
+"""Small text helpers shared by the subcommands."""
+
+from __future__ import annotations
+
+from argparse import ArgumentTypeError
+from collections.abc import Sequence
+
+
+def table(headers: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """An aligned plain-text table; floats in 4 significant digits."""
+
+    def cell(value: object) -> str:
+        return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+    cells = [[cell(v) for v in row] for row in rows]
+    widths = [max(len(h), *(len(r[i]) for r in cells)) for i, h in enumerate(headers)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(headers, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)) for row in cells]
+    return "\n".join(lines)
+
+
+def float_list(text: str) -> list[float]:
+    """Parse ``"1.0"`` or ``"1,2,3"`` into floats (argparse ``type=``)."""
+    try:
+        return [float(x) for x in text.split(",")]
+    except ValueError:
+        raise ArgumentTypeError(
+            f"must be a number or a comma-separated list of numbers, got {text!r}"
+        ) from None
+
+
+def positive_int(text: str) -> int:
+    """Parse a positive integer (argparse ``type=``)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = None
+    if value is None or value < 1:
+        raise ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return value
+
+
+def non_negative_int(text: str) -> int:
+    """Parse an integer >= 0 (argparse ``type=``)."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = None
+    if value is None or value < 0:
+        raise ArgumentTypeError(f"must be an integer >= 0, got {text!r}")
+    return value

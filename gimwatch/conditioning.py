@@ -1,0 +1,216 @@
+"""Conditioning metrics of a symmetric positive-definite matrix (a GIM or its diagonal).
+
+Pure NumPy/SciPy: this module knows no robot. Every function that takes a full matrix
+checks it first (square, finite, symmetric, positive definite) and raises
+:class:`~gimwatch.errors.ConditioningError` otherwise.
+
+Metrics (Shah & Saha 2013):
+
+* :func:`condition_number` — κ₂ = λmax / λmin (Eq. 6), from a symmetric eigensolver.
+* :func:`diagonal_ratio` — δ = max_i M_ii / min_i M_ii (Sec. 4); free once diag M is known.
+* :class:`ScaledDiagonalRatio` — αδ with α = κ(t0) / δ(t0) (Eq. 15).
+* :func:`pivot_ratio_forward` / :func:`pivot_ratio_backward` — max/min pivot of Gaussian
+  elimination without pivoting (Sec. 4, Fig. 4), eliminating from the first coordinate
+  (LDLᵀ, the paper's order) or from the last (UDUᵀ, the order of Pinocchio's
+  ``cholesky.decompose`` and of the O(n) forward-dynamics recursions).
+* :func:`condition_estimate_1norm` — LAPACK ``pocon``'s estimate of κ₁ from the Cholesky
+  factor, a cheap baseline (O(n²) after the O(n³) factorisation).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import numpy.typing as npt
+import scipy.linalg
+from scipy.linalg import lapack
+
+from gimwatch.errors import ConditioningError, InputError
+
+__all__ = [
+    "ScaledDiagonalRatio",
+    "check_gim",
+    "condition_estimate_1norm",
+    "condition_number",
+    "diagonal_ratio",
+    "eigenvalues",
+    "ldlt_pivots",
+    "pivot_ratio_backward",
+    "pivot_ratio_forward",
+    "udut_pivots",
+]
+
+#: Relative asymmetry max|M - Mᵀ| / max|M| accepted as round-off.
+SYMMETRY_RTOL = 1e-10
+
+
+def check_gim(matrix: npt.ArrayLike) -> np.ndarray:
+    """Return ``matrix`` as a float array after checking it is a valid GIM.
+
+    Raises:
+        ConditioningError: Not square, empty, not finite, not symmetric (beyond
+            ``SYMMETRY_RTOL``) or not positive definite.
+    """
+    M = np.asarray(matrix, dtype=float)
+    if M.ndim != 2 or M.shape[0] != M.shape[1] or M.shape[0] == 0:
+        raise ConditioningError(f"the GIM must be a non-empty square matrix, got shape {M.shape}")
+    if not np.all(np.isfinite(M)):
+        raise ConditioningError("the GIM must be finite, got NaN or inf entries")
+    scale = np.max(np.abs(M))
+    asymmetry = np.max(np.abs(M - M.T))
+    if asymmetry > SYMMETRY_RTOL * scale:
+        raise ConditioningError(
+            f"the GIM must be symmetric, got max|M - M^T| / max|M| = {asymmetry / scale:.3g}"
+        )
+    if np.any(np.diag(M) <= 0):
+        k = int(np.argmin(np.diag(M)))
+        raise ConditioningError(
+            f"the GIM must be positive definite, got diagonal entry {k} = {M[k, k]:.6g}"
+        )
+    return M
+
+
+def _cholesky_lower(M: np.ndarray) -> np.ndarray:
+    try:
+        return scipy.linalg.cholesky(M, lower=True, check_finite=False)
+    except np.linalg.LinAlgError as exc:
+        raise ConditioningError(f"the GIM must be positive definite ({exc})") from exc
+
+
+def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
+    """Eigenvalues of the GIM in ascending order (symmetric eigensolver, LAPACK syevr)."""
+    M = check_gim(matrix)
+    values = scipy.linalg.eigvalsh(M, check_finite=False)
+    if values[0] <= 0:
+        raise ConditioningError(
+            f"the GIM must be positive definite, got smallest eigenvalue {values[0]:.6g}"
+        )
+    return values
+
+
+def condition_number(matrix: npt.ArrayLike) -> float:
+    """κ₂(M) = λmax / λmin (Shah & Saha 2013, Eq. 6).
+
+    Round-off limits it: λmin is known only to about eps·λmax, so values near 1/eps
+    (~4.5e15) carry no digits.
+    """
+    values = eigenvalues(matrix)
+    return float(values[-1] / values[0])
+
+
+def _diagonal_of(matrix_or_diagonal: npt.ArrayLike) -> np.ndarray:
+    array = np.asarray(matrix_or_diagonal, dtype=float)
+    diag = np.diag(array) if array.ndim == 2 else array
+    if diag.ndim != 1 or diag.size == 0:
+        raise ConditioningError(f"expected a GIM or its diagonal, got shape {array.shape}")
+    if not np.all(np.isfinite(diag)) or np.any(diag <= 0):
+        raise ConditioningError("the GIM's diagonal must be finite and positive")
+    return diag
+
+
+def diagonal_ratio(matrix_or_diagonal: npt.ArrayLike) -> float:
+    """δ = max_i M_ii / min_i M_ii (Shah & Saha 2013, Sec. 4), from M or diag M.
+
+    Since λmin <= M_ii <= λmax, δ is a lower bound of κ₂.
+    """
+    diag = _diagonal_of(matrix_or_diagonal)
+    return float(diag.max() / diag.min())
+
+
+class ScaledDiagonalRatio:
+    """The scaled diagonal ratio αδ of Shah & Saha (2013), Eq. (15).
+
+    α = κ(M₀) / δ(M₀) is fixed once, at the first matrix (t = 0); afterwards each call
+    costs only the diagonal ratio. Calibrating again is refused so that α cannot be tuned
+    after the fact.
+
+    Example:
+        >>> import numpy as np
+        >>> estimator = ScaledDiagonalRatio()
+        >>> estimator.calibrate(np.diag([4.0, 1.0]))
+        1.0
+        >>> estimator(np.array([9.0, 1.0]))
+        9.0
+    """
+
+    def __init__(self, alpha: float | None = None) -> None:
+        if alpha is not None and not (np.isfinite(alpha) and alpha > 0):
+            raise InputError("alpha", "finite and > 0", alpha)
+        self._alpha = None if alpha is None else float(alpha)
+
+    @property
+    def alpha(self) -> float | None:
+        """The scale α, or None before calibration."""
+        return self._alpha
+
+    @property
+    def calibrated(self) -> bool:
+        """Whether α is known."""
+        return self._alpha is not None
+
+    def calibrate(self, matrix: npt.ArrayLike) -> float:
+        """Set α = κ(M₀)/δ(M₀) from the initial GIM and return it."""
+        if self._alpha is not None:
+            raise ConditioningError("the scaled diagonal ratio is already calibrated")
+        M = check_gim(matrix)
+        self._alpha = condition_number(M) / diagonal_ratio(M)
+        return self._alpha
+
+    def __call__(self, matrix_or_diagonal: npt.ArrayLike) -> float:
+        """αδ for a GIM or its diagonal; the first full matrix calibrates α if needed."""
+        if self._alpha is None:
+            if np.ndim(matrix_or_diagonal) != 2:
+                raise ConditioningError(
+                    "the scaled diagonal ratio needs a full GIM to calibrate α first"
+                )
+            self.calibrate(matrix_or_diagonal)
+        return self._alpha * diagonal_ratio(matrix_or_diagonal)
+
+    def __repr__(self) -> str:
+        return f"ScaledDiagonalRatio(alpha={self._alpha!r})"
+
+
+def ldlt_pivots(matrix: npt.ArrayLike) -> np.ndarray:
+    """Pivots of M = L D Lᵀ (L unit lower): Gaussian elimination from the first coordinate.
+
+    No pivoting; ``D_k = L_chol[k, k]²`` from the Cholesky factor.
+    """
+    M = check_gim(matrix)
+    return np.diag(_cholesky_lower(M)) ** 2
+
+
+def udut_pivots(matrix: npt.ArrayLike) -> np.ndarray:
+    """Pivots of M = U D Uᵀ (U unit upper), i.e. elimination from the last coordinate.
+
+    This is the factorisation of Pinocchio's ``cholesky.decompose`` (its ``data.D``) and
+    the pivots the O(n) tip-to-root forward-dynamics recursions produce; it equals the
+    LDLᵀ of the matrix with its coordinates reversed.
+    """
+    M = check_gim(matrix)
+    return (np.diag(_cholesky_lower(M[::-1, ::-1])) ** 2)[::-1]
+
+
+def pivot_ratio_forward(matrix: npt.ArrayLike) -> float:
+    """max/min of the LDLᵀ pivots (the paper's Gaussian elimination, Fig. 4)."""
+    pivots = ldlt_pivots(matrix)
+    return float(pivots.max() / pivots.min())
+
+
+def pivot_ratio_backward(matrix: npt.ArrayLike) -> float:
+    """max/min of the UDUᵀ pivots (elimination from the tips, as in Pinocchio and DeNOC)."""
+    pivots = udut_pivots(matrix)
+    return float(pivots.max() / pivots.min())
+
+
+def condition_estimate_1norm(matrix: npt.ArrayLike) -> float:
+    """LAPACK ``dpocon``'s estimate of κ₁(M) = ‖M‖₁‖M⁻¹‖₁ from the Cholesky factor.
+
+    The estimate is a lower bound of κ₁ that is usually within a factor of a few; κ₂ lies
+    within a factor n of κ₁.
+    """
+    M = check_gim(matrix)
+    factor = _cholesky_lower(M)
+    anorm = float(np.max(np.sum(np.abs(M), axis=0)))
+    rcond, info = lapack.dpocon(factor, anorm, uplo="L")
+    if info != 0 or rcond <= 0:
+        raise ConditioningError(f"LAPACK dpocon failed (info = {info}, rcond = {rcond})")
+    return float(1.0 / rcond)

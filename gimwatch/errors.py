@@ -1,0 +1,89 @@
+"""The exception tree of gimwatch and its ill-conditioning warning.
+
+Every error gimwatch raises on bad input derives from :class:`GimwatchError`; the
+subclasses keep the offending value as attributes and build a one-line message from
+them (what was wrong, what was received, and the fix when it is obvious). The command
+line prints that line and exits with status 2.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "ConditioningError",
+    "GimwatchError",
+    "IllConditionedWarning",
+    "InputError",
+    "RobotError",
+    "SceneError",
+    "SimulationError",
+    "URDFError",
+]
+
+
+class GimwatchError(Exception):
+    """Base class of every error gimwatch raises on purpose."""
+
+
+class InputError(GimwatchError, ValueError):
+    """A bad argument: ``name`` must satisfy ``rule``, got ``value``."""
+
+    def __init__(self, name: str, rule: str, value: object = None, *, hint: str = "") -> None:
+        self.name = name
+        self.rule = rule
+        self.value = value
+        self.hint = hint
+        message = f"{name} must be {rule}, got {value!r}"
+        if hint:
+            message += f" ({hint})"
+        super().__init__(message)
+
+
+class URDFError(GimwatchError):
+    """A URDF file (or string) that cannot be used, with the element at fault."""
+
+    def __init__(self, source: str, problem: str, *, element: str = "") -> None:
+        self.source = source
+        self.problem = problem
+        self.element = element
+        where = f"{source}: {element}: " if element else f"{source}: "
+        super().__init__(where + problem)
+
+
+class RobotError(GimwatchError):
+    """A robot specification that names nothing loadable, or a model gimwatch cannot use."""
+
+    def __init__(self, spec: str, problem: str) -> None:
+        self.spec = spec
+        self.problem = problem
+        super().__init__(f"robot {spec!r}: {problem}")
+
+
+class SceneError(GimwatchError):
+    """A scene file with a bad key: ``source: key: problem``."""
+
+    def __init__(self, source: str, key: str, problem: str) -> None:
+        self.source = source
+        self.key = key
+        self.problem = problem
+        super().__init__(f"{source}: {key}: {problem}" if key else f"{source}: {problem}")
+
+
+class ConditioningError(GimwatchError, ValueError):
+    """A matrix that is not a valid GIM (not square, finite, symmetric or positive definite)."""
+
+    def __init__(self, problem: str) -> None:
+        self.problem = problem
+        super().__init__(problem)
+
+
+class SimulationError(GimwatchError):
+    """A simulation that could not go on (non-finite state, collapsed step size, ...)."""
+
+    def __init__(self, time_s: float, cause: str) -> None:
+        self.time_s = time_s
+        self.cause = cause
+        super().__init__(f"simulation stopped at t = {time_s:.6g} s: {cause}")
+
+
+class IllConditionedWarning(UserWarning):
+    """The GIM's condition number (or its estimate) crossed a threshold."""

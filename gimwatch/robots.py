@@ -1,0 +1,253 @@
+"""Turn a robot specification into a :class:`Robot` (a Pinocchio model plus what it came from).
+
+A specification is one of:
+
+* ``chain:N`` — the paper's chain of N slender rods (2.2 kg, 1 m), generated on the fly;
+* a path to a URDF file;
+* the name of a robot in example-robot-data (``ur5``, ``panda``, ``talos_arm``, ...).
+
+The base is fixed unless ``floating=True``, which adds Pinocchio's free-flyer root joint.
+No :class:`pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
+nv = 300), so callers ask for it with :meth:`Robot.new_data` only when they need it.
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from gimwatch.chains import ChainSpec, chain_spec, generate_chain_urdf
+from gimwatch.errors import InputError, RobotError, URDFError
+
+__all__ = [
+    "Robot",
+    "example_robot_names",
+    "load_robot",
+    "neutral_configuration",
+    "random_configurations",
+]
+
+_CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
+#: Above this many velocity coordinates, a Pinocchio Data would need several GB.
+DATA_NV_LIMIT = 400
+_DEFAULT_ANGLE_RAD = np.pi
+_DEFAULT_TRANSLATION_M = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """A kinematic tree ready for dynamics.
+
+    Attributes:
+        name: Short name (the example-robot-data name, the URDF's robot name, ``chain_N``).
+        spec: The specification it was loaded from.
+        model: The Pinocchio model (free-flyer root first when ``floating``).
+        urdf_xml: The URDF text the model was built from (DeNOC re-reads it independently).
+        source: Where the URDF came from (a path, or ``"<generated chain_N>"``).
+        floating: Whether a free-flyer root joint was added.
+        chain: The chain spec for generated chains, else None.
+    """
+
+    name: str
+    spec: str
+    model: pin.Model
+    urdf_xml: str
+    source: str
+    floating: bool = False
+    chain: ChainSpec | None = None
+    dof_names: tuple[str, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        names = []
+        for joint, joint_name in zip(self.model.joints[1:], self.model.names[1:], strict=True):
+            if joint.nv == 1:
+                names.append(joint_name)
+            else:
+                names.extend(f"{joint_name}[{k}]" for k in range(joint.nv))
+        object.__setattr__(self, "dof_names", tuple(names))
+
+    @property
+    def nq(self) -> int:
+        """Number of configuration coordinates."""
+        return self.model.nq
+
+    @property
+    def nv(self) -> int:
+        """Number of velocity coordinates (the size of the GIM)."""
+        return self.model.nv
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Names of the moving joints in Pinocchio's order (the free-flyer is ``root_joint``)."""
+        return tuple(self.model.names[1:])
+
+    def new_data(self) -> pin.Data:
+        """A fresh :class:`pinocchio.Data`; refuses models whose Data would not fit in memory."""
+        if self.nv > DATA_NV_LIMIT:
+            raise RobotError(
+                self.spec,
+                f"nv = {self.nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
+                f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
+            )
+        return self.model.createData()
+
+
+@cache
+def _example_robots() -> dict[str, type]:
+    from example_robot_data.robots_loader import ROBOTS
+
+    return dict(ROBOTS)
+
+
+def example_robot_names() -> tuple[str, ...]:
+    """Names of the robots example-robot-data knows, in its own order."""
+    return tuple(_example_robots())
+
+
+def _example_robot_urdf(name: str) -> Path:
+    from example_robot_data.robots_loader import getModelPath
+
+    loader = _example_robots()[name]
+    if not loader.urdf_filename:
+        raise RobotError(name, "example-robot-data ships it only as SDF; gimwatch reads URDF")
+    relative = str(Path(loader.path) / loader.urdf_subpath / loader.urdf_filename)
+    return Path(getModelPath(relative)) / relative
+
+
+def _read_urdf(path: Path) -> str:
+    if not path.exists():
+        raise URDFError(str(path), "no such file")
+    if path.is_dir():
+        raise URDFError(str(path), "is a directory, not a URDF file")
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise URDFError(str(path), f"cannot be read ({exc})") from exc
+
+
+def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
+    from gimwatch.urdf import check_urdf
+
+    check_urdf(xml, source)
+    try:
+        if floating:
+            return pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
+        return pin.buildModelFromXML(xml)
+    except (RuntimeError, ValueError) as exc:
+        raise URDFError(source, f"Pinocchio cannot build a model: {exc}") from exc
+
+
+def load_robot(spec: str | Path, floating: bool = False) -> Robot:
+    """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
+
+    Args:
+        spec: The robot specification (see the module docstring).
+        floating: Add a free-flyer root joint (6 DoF) instead of fixing the base.
+
+    Returns:
+        The loaded :class:`Robot`.
+
+    Raises:
+        RobotError: The spec names nothing loadable, or the model has no degree of freedom.
+        URDFError: The URDF file is missing, unreadable or invalid.
+    """
+    text = str(spec)
+    chain = None
+    match = _CHAIN_SPEC.match(text)
+    if match:
+        try:
+            n = int(match.group(1))
+        except ValueError:
+            raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
+        chain = chain_spec(n)
+        xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
+    elif text in _example_robots():
+        path = _example_robot_urdf(text)
+        xml, source, name = _read_urdf(path), str(path), text
+    elif text.lower().endswith((".urdf", ".xml")) or Path(text).exists() or "/" in text:
+        path = Path(text)
+        xml, source, name = _read_urdf(path), str(path), path.stem
+    else:
+        close = difflib.get_close_matches(text, _example_robots(), n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
+    model = _build_model(xml, source, floating)
+    if model.nv == 0:
+        raise RobotError(
+            text, "has no degree of freedom with a fixed base; load it with a floating base"
+        )
+    return Robot(
+        name=name,
+        spec=text,
+        model=model,
+        urdf_xml=xml,
+        source=source,
+        floating=floating,
+        chain=chain,
+    )
+
+
+def neutral_configuration(robot: Robot) -> np.ndarray:
+    """Pinocchio's neutral configuration (zero angles, identity quaternions)."""
+    return pin.neutral(robot.model)
+
+
+def _unit_block_size(joint: pin.JointModel) -> int:
+    """Size of the unit-norm part of a joint's q (4 for quaternions, 2 for unit complex)."""
+    if joint.nq == joint.nv:
+        return 0
+    kind = joint.shortname()
+    return 4 if ("Spherical" in kind or "FreeFlyer" in kind) else 2
+
+
+def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = None) -> np.ndarray:
+    """Configurations drawn uniformly within the joint limits, shape ``(count, nq)``.
+
+    Unbounded coordinates are drawn in ±π rad (angles) or ±1 m (translations); quaternions
+    and the unit complex numbers of continuous joints are drawn uniformly on their sphere.
+
+    Args:
+        robot: The robot.
+        count: Number of configurations, >= 1.
+        seed: Seed of NumPy's generator; the same seed gives the same configurations.
+    """
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+        raise InputError("count", "a positive integer", count)
+    model = robot.model
+    rng = np.random.default_rng(seed)
+    lower = np.array(model.lowerPositionLimit, dtype=float)
+    upper = np.array(model.upperPositionLimit, dtype=float)
+    qs = np.empty((count, model.nq))
+    for joint in model.joints[1:]:
+        start, stop = joint.idx_q, joint.idx_q + joint.nq
+        unit = _unit_block_size(joint)
+        box = slice(start, stop - unit)
+        default = (
+            _DEFAULT_ANGLE_RAD
+            if joint.shortname().startswith("JointModelR")
+            else (_DEFAULT_TRANSLATION_M)
+        )
+        lo = np.where(np.isfinite(lower[box]) & (np.abs(lower[box]) < 1e10), lower[box], -default)
+        hi = np.where(np.isfinite(upper[box]) & (np.abs(upper[box]) < 1e10), upper[box], default)
+        qs[:, box] = rng.uniform(lo, hi, size=(count, stop - unit - start))
+        if unit:
+            block = rng.standard_normal((count, unit))
+            qs[:, stop - unit : stop] = block / np.linalg.norm(block, axis=1, keepdims=True)
+    return qs
+
+
+def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
+    """Check that ``q`` is a finite vector of length nq and return it as an array."""
+    array = np.asarray(q, dtype=float)
+    if array.shape != (robot.nq,):
+        raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
+    if not np.all(np.isfinite(array)):
+        raise InputError("q", "finite", array.tolist())
+    return array

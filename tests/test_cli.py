@@ -1,0 +1,101 @@
+import json
+
+import numpy as np
+import pytest
+from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM
+
+from gimwatch.chains import chain_spec, generate_chain_urdf
+from gimwatch.cli import main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_chain_command_writes_the_committed_file(capsys, tmp_path):
+    out_file = tmp_path / "c.urdf"
+    code, _, _ = run(capsys, "chain", "4", "-o", str(out_file))
+    assert code == 0
+    assert out_file.read_text() == generate_chain_urdf(chain_spec(4))
+    code, out, _ = run(capsys, "chain", "3", "--mass", "1,2,3", "--axes", "spatial")
+    assert code == 0 and out == generate_chain_urdf(
+        chain_spec(3, mass_kg=[1, 2, 3], axes="spatial")
+    )
+
+
+def test_analyze_json_for_the_paper_chain(capsys):
+    code, out, _ = run(capsys, "analyze", "chain:4", "--json")
+    record = json.loads(out)
+    assert code == 0
+    assert {
+        "robot",
+        "nv",
+        "q",
+        "kappa",
+        "diagonal_ratio",
+        "pivot_ratio_forward",
+        "pivot_ratio_backward",
+        "eigenvalues",
+        "diagonal",
+    } <= set(record)
+    assert record["kappa"] == pytest.approx(1074.44, abs=0.01)
+    assert record["diagonal_ratio"] == pytest.approx(64)
+    assert record["max_diagonal_dof"] == "joint_1" and record["min_diagonal_dof"] == "joint_4"
+
+
+def test_analyze_random_gives_a_list_and_q_is_used(capsys):
+    code, out, _ = run(capsys, "analyze", "ur5", "--random", "3", "--seed", "1", "--json")
+    records = json.loads(out)
+    assert code == 0 and len(records) == 3
+    q = records[1]["q"]
+    code, out, _ = run(capsys, "analyze", "ur5", "--json", "--q", *map(str, q))
+    assert json.loads(out)["kappa"] == pytest.approx(records[1]["kappa"], rel=1e-12)
+
+
+@pytest.mark.parametrize("floating", [False, True], ids=["fixed", "floating"])
+@pytest.mark.parametrize("name", EXAMPLE_ROBOTS)
+def test_analyze_every_example_robot(capsys, name, floating):
+    argv = ["analyze", name, "--json"] + (["--floating"] if floating else [])
+    code, out, err = run(capsys, *argv)
+    if name in NO_DOF_WHEN_FIXED and not floating:
+        assert code == 2 and err.count("\n") == 1 and "no degree of freedom" in err
+        return
+    if name in SINGULAR_GIM:
+        assert code == 2 and err.count("\n") == 1 and "is singular" in err and "move no mass" in err
+        return
+    assert code == 0, err
+    record = json.loads(out)
+    assert record["nv"] == len(record["diagonal"]) == len(record["eigenvalues"])
+    assert np.isfinite(record["kappa"]) and record["kappa"] >= record["diagonal_ratio"] >= 1
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["chain", "0"],
+            "gimwatch: error: gimwatch chain: argument n: must be a positive integer, got '0'",
+        ),
+        (["analyze", "ur5", "--q", "0.1"], "gimwatch: error: --q must be 6 numbers for ur5, got 1"),
+        (["analyze", "ur5", "--random", "-1"], "argument --random: must be a positive integer"),
+        (["analyze", "nope"], "gimwatch: error: robot 'nope': not chain:N"),
+        (
+            ["analyze", "ur5", "--q", "1", "--random", "2"],
+            "--q and --random must be used one at a time",
+        ),
+        (["frobnicate"], "argument command: invalid choice: 'frobnicate'"),
+    ],
+)
+def test_bad_arguments_give_one_line_and_exit_2(capsys, argv, message):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert err.count("\n") == 1 and message in err, err
+    assert out == ""
+
+
+def test_demo_writes_report(capsys, tmp_path):
+    code, out, _ = run(capsys, "demo", "-o", str(tmp_path))
+    assert code == 0
+    assert (tmp_path / "report.md").exists() and "| 20 |" in out
