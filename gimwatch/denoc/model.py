@@ -1,0 +1,193 @@
+"""`DenocModel`: the DeNOC GIM and dynamics of a URDF, in Pinocchio's coordinate layout.
+
+Coordinates follow Pinocchio exactly so that matrices and vectors compare entry by entry:
+a free-flyer contributes q = (x, y, z, qx, qy, qz, qw) and v = (local linear, local
+angular velocity); a continuous joint q = (cos θ, sin θ); revolute and prismatic joints one
+number. The joints' order is ``joint_order`` (callers pass Pinocchio's ``model.names[1:]``);
+by default the joints sorted by name, ``root_joint`` first.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+from gimwatch.denoc import recursions
+from gimwatch.denoc.tree import FREE_FLYER_NAME, BodyTree, read_body_tree
+from gimwatch.errors import InputError
+
+__all__ = ["DenocModel"]
+
+_GRAVITY = (0.0, 0.0, -9.81)
+
+
+def _vector(name: str, value: npt.ArrayLike, size: int) -> np.ndarray:
+    array = np.asarray(value, dtype=float)
+    if array.shape != (size,):
+        raise InputError(name, f"a vector of {size} numbers", array.shape)
+    if not np.all(np.isfinite(array)):
+        raise InputError(name, "finite", array.tolist())
+    return array
+
+
+class DenocModel:
+    """A robot's body tree and the index maps between its coordinates and DeNOC's.
+
+    Build it with :meth:`from_urdf`. Internally bodies are numbered parents-first; the
+    maps below translate to and from the public (``joint_names``) order.
+    """
+
+    def __init__(self, tree: BodyTree, joint_order: Sequence[str] | None = None) -> None:
+        self.tree = tree
+        moving = [name for name in tree.joint_names if name]
+        if joint_order is None:
+            rest = sorted(name for name in moving if name != FREE_FLYER_NAME)
+            joint_order = ([FREE_FLYER_NAME] if tree.floating else []) + rest
+        order = tuple(joint_order)
+        if sorted(order) != sorted(moving):
+            raise InputError(
+                "joint_order",
+                f"a permutation of the {len(moving)} moving joints of {tree.source}",
+                list(order),
+                hint=f"expected the names {sorted(moving)}",
+            )
+        body_of = {name: i for i, name in enumerate(tree.joint_names) if name}
+        self.joint_names: tuple[str, ...] = order
+        self._q_index = np.zeros(tree.size, dtype=np.intp)
+        self._root_q = 0
+        v_of_body = np.zeros(tree.size, dtype=np.intp)
+        root_v = 0
+        nq = nv = 0
+        for name in order:
+            body = body_of[name]
+            if body == 0:
+                self._root_q, root_v = nq, nv
+                nq, nv = nq + 7, nv + 6
+                continue
+            self._q_index[body], v_of_body[body] = nq, nv
+            nq += 2 if tree.kind[body] == 2 else 1
+            nv += 1
+        self.nq, self.nv = nq, nv
+        root = np.arange(root_v, root_v + 6) if tree.floating else np.zeros(0, np.intp)
+        #: internal coordinate k is public coordinate _v_index[k]
+        self._v_index = np.concatenate([root, v_of_body[1:]]).astype(np.intp)
+
+    @classmethod
+    def from_urdf(
+        cls,
+        xml_text: str,
+        *,
+        floating: bool = False,
+        source: str = "<string>",
+        joint_order: Sequence[str] | None = None,
+    ) -> DenocModel:
+        """Read URDF text (through yourdfpy, no meshes) into a model.
+
+        Args:
+            xml_text: The URDF.
+            floating: Put the root link on a free-flyer named ``root_joint``.
+            source: Where the text came from, for error messages.
+            joint_order: Names of the moving joints in the order the coordinates follow.
+
+        Raises:
+            URDFError: Unsupported joint type, not a tree, non-finite numbers, zero axis.
+            InputError: ``joint_order`` is not a permutation of the moving joints.
+        """
+        return cls(read_body_tree(xml_text, floating=floating, source=source), joint_order)
+
+    def permutation_to(self, order: Sequence[str]) -> np.ndarray:
+        """Index array ``perm`` (nv,) with ``x_in_order = x[perm]`` for velocity-space vectors.
+
+        ``M[np.ix_(perm, perm)]`` is the GIM with its coordinates in ``order``.
+        """
+        other = DenocModel(self.tree, order)
+        inverse = np.empty(self.nv, dtype=np.intp)
+        inverse[other._v_index] = np.arange(self.nv)
+        return self._v_index[inverse]
+
+    # -- coordinates -------------------------------------------------------------------
+    def _kinematics(self, q: npt.ArrayLike) -> recursions.Kinematics:
+        q = _vector("q", q, self.nq)
+        tree = self.tree
+        first = q[self._q_index]
+        second = q[np.minimum(self._q_index + 1, self.nq - 1)]
+        kind = tree.kind
+        cos = np.where(kind == 1, np.cos(first), np.where(kind == 2, first, 1.0))
+        sin = np.where(kind == 1, np.sin(first), np.where(kind == 2, second, 0.0))
+        displacement = np.where(kind == 3, first, 0.0)
+        root = q[self._root_q : self._root_q + 7] if tree.floating else None
+        return recursions.kinematics(tree, cos, sin, displacement, root)
+
+    def _to_internal(self, name: str, x: npt.ArrayLike) -> np.ndarray:
+        return _vector(name, x, self.nv)[self._v_index]
+
+    def _to_public(self, x: np.ndarray) -> np.ndarray:
+        out = np.empty(self.nv)
+        out[self._v_index] = x
+        return out
+
+    def _split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Internal vector → (per-body values (N,), root's 6 values)."""
+        start = 6 if self.tree.floating else 0
+        per_body = np.zeros(self.tree.size)
+        per_body[1:] = x[start:]
+        return per_body, x[:start]
+
+    # -- the GIM ----------------------------------------------------------------------
+    def gim(self, q: npt.ArrayLike) -> np.ndarray:
+        """M(q), (nv, nv), from Shah & Saha (2013) Eqs. 11–13 (composite mass matrices)."""
+        M = recursions.gim(self.tree, self._kinematics(q))
+        out = np.empty_like(M)
+        out[np.ix_(self._v_index, self._v_index)] = M
+        return out
+
+    def gim_diagonal(self, q: npt.ArrayLike) -> np.ndarray:
+        """Diag M(q) = (p_iᵀ M̃_i p_i) in O(n) (Shah & Saha 2013, Eq. 13)."""
+        return self._to_public(recursions.gim_diagonal(self.tree, self._kinematics(q)))
+
+    # -- dynamics ---------------------------------------------------------------------
+    def inverse_dynamics(
+        self,
+        q: npt.ArrayLike,
+        v: npt.ArrayLike,
+        a: npt.ArrayLike,
+        *,
+        gravity: npt.ArrayLike = _GRAVITY,
+    ) -> np.ndarray:
+        """τ = M(q) a + h(q, v) by the DeNOC recursions (Saha's τ = Nᵀ w), N·m or N."""
+        kin = self._kinematics(q)
+        qd, root_v = self._split(self._to_internal("v", v))
+        qdd, root_a = self._split(self._to_internal("a", a))
+        g = _vector("gravity", gravity, 3)
+        tau = recursions.inverse_dynamics(self.tree, kin, qd, qdd, root_v, root_a, g)
+        return self._to_public(tau)
+
+    def forward_dynamics(
+        self,
+        q: npt.ArrayLike,
+        v: npt.ArrayLike,
+        tau: npt.ArrayLike,
+        *,
+        gravity: npt.ArrayLike = _GRAVITY,
+    ) -> np.ndarray:
+        """q̈ = M(q)⁻¹ (τ − h(q, v)) by Saha's O(n) UDUᵀ recursion from the tips."""
+        kin = self._kinematics(q)
+        qd, root_v = self._split(self._to_internal("v", v))
+        torque = self._to_internal("tau", tau)
+        g = _vector("gravity", gravity, 3)
+        qdd, _ = recursions.forward_dynamics(self.tree, kin, qd, torque, root_v, g)
+        return self._to_public(qdd)
+
+    def forward_dynamics_pivots(self, q: npt.ArrayLike) -> np.ndarray:
+        """The backward (UDUᵀ) pivots d_i = p_iᵀ M̂_i p_i of the forward-dynamics recursion.
+
+        They are the D of ``M = U D Uᵀ`` for any parents-first coordinate order (Pinocchio's
+        ``cholesky.decompose``); the free-flyer's six are the UDUᵀ pivots of its 6×6
+        articulated block.
+        """
+        _, pivots = recursions.forward_dynamics(
+            self.tree, self._kinematics(q), None, None, None, np.zeros(3)
+        )
+        return self._to_public(pivots)
