@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from gimwatch.denoc import recursions
 from gimwatch.denoc.tree import FREE_FLYER_NAME, BodyTree, read_body_tree
-from gimwatch.errors import InputError
+from gimwatch.errors import ConditioningError, InputError
 
 __all__ = ["DenocModel"]
 
@@ -177,17 +177,41 @@ class DenocModel:
         qd, root_v = self._split(self._to_internal("v", v))
         torque = self._to_internal("tau", tau)
         g = _vector("gravity", gravity, 3)
-        qdd, _ = recursions.forward_dynamics(self.tree, kin, qd, torque, root_v, g)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            qdd, pivots = recursions.forward_dynamics(self.tree, kin, qd, torque, root_v, g)
+        self._check_pivots(pivots)
         return self._to_public(qdd)
+
+    def _check_pivots(self, pivots: np.ndarray) -> None:
+        """Raise when an elimination pivot is not positive: M(q) is singular there."""
+        bad = np.flatnonzero(~(pivots > 0))
+        if bad.size:
+            k = int(self._v_index[bad[-1]])  # the first eliminated (from the tips)
+            raise ConditioningError(
+                f"M(q) is singular: the pivot of coordinate {k} ({self._coordinate_name(k)}) "
+                f"is {float(pivots[bad[-1]])!r}, so q̈ is undefined (a joint that moves no mass?)"
+            )
+
+    def _coordinate_name(self, k: int) -> str:
+        """Joint name of public velocity coordinate k (``root_joint[i]`` for the free-flyer)."""
+        offset = 0
+        for name in self.joint_names:
+            width = 6 if name == FREE_FLYER_NAME and self.tree.floating else 1
+            if k < offset + width:
+                return f"{name}[{k - offset}]" if width > 1 else name
+            offset += width
+        raise IndexError(k)
 
     def forward_dynamics_pivots(self, q: npt.ArrayLike) -> np.ndarray:
         """The backward (UDUᵀ) pivots d_i = p_iᵀ M̂_i p_i of the forward-dynamics recursion.
 
         They are the D of ``M = U D Uᵀ`` for any parents-first coordinate order (Pinocchio's
         ``cholesky.decompose``); the free-flyer's six are the UDUᵀ pivots of its 6×6
-        articulated block.
+        articulated block. A joint that moves no mass has pivot 0 (M(q) is singular); the
+        pivots eliminated after it are then NaN.
         """
-        _, pivots = recursions.forward_dynamics(
-            self.tree, self._kinematics(q), None, None, None, np.zeros(3)
-        )
+        with np.errstate(divide="ignore", invalid="ignore"):
+            _, pivots = recursions.forward_dynamics(
+                self.tree, self._kinematics(q), None, None, None, np.zeros(3)
+            )
         return self._to_public(pivots)

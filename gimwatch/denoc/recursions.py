@@ -256,8 +256,12 @@ def inverse_dynamics(
 
 def udut_pivots_small(D: np.ndarray) -> np.ndarray:
     """Pivots of ``D = U Δ Uᵀ`` (U unit upper, elimination from the last coordinate)."""
-    flipped = np.linalg.cholesky(D[::-1, ::-1])
-    return (np.diag(flipped) ** 2)[::-1]
+    work = np.array(D, dtype=float, copy=True)
+    pivots = np.empty(len(work))
+    for k in range(len(work) - 1, -1, -1):  # 6 steps for the free-flyer block
+        pivots[k] = work[k, k]
+        work[:k, :k] -= np.outer(work[:k, k], work[:k, k]) / pivots[k]
+    return pivots
 
 
 def forward_dynamics(

@@ -1,0 +1,93 @@
+"""Cross-check DeNOC (numpy + yourdfpy) against Pinocchio: GIM, τ, q̈ and UDUᵀ pivots.
+
+ROBOT is chain:N, a URDF path, an example-robot-data name, or ``all`` (every
+example-robot-data robot; those that cannot be loaded are skipped with the reason on
+stderr). Exit status 1 when any robot is beyond the tolerance.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from gimwatch.cli._format import positive_int, table
+from gimwatch.crosscheck import DEFAULT_TOLERANCE, CrossCheckResult, crosscheck_robot
+from gimwatch.errors import InputError, RobotError
+from gimwatch.results import to_json
+from gimwatch.robots import example_robot_names, load_robot
+
+NAME = "crosscheck"
+HELP = "compare DeNOC with Pinocchio (crba, rnea, aba, cholesky) at random states"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declare the subcommand's arguments."""
+    parser.add_argument("robots", nargs="+", metavar="ROBOT", help="robot specs, or 'all'")
+    parser.add_argument("--samples", type=positive_int, default=10, help="random states (10)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the random states")
+    parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    parser.add_argument(
+        "--tolerance",
+        type=float,
+        default=DEFAULT_TOLERANCE,
+        help=f"largest relative error that passes ({DEFAULT_TOLERANCE:g})",
+    )
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+
+def _print(results: list[CrossCheckResult], as_json: bool) -> None:
+    if as_json:
+        print(to_json([r.to_dict() for r in results]))
+        return
+    headers = ["robot", "base", "nv", "GIM", "diag", "tau", "qdd", "qdd bwd", "pivots", "kappa"]
+    rows = [
+        [
+            r.robot + ("" if r.passed else "  FAIL"),
+            "floating" if r.floating else "fixed",
+            r.nv,
+            r.gim_rel_err,
+            r.gim_diagonal_rel_err,
+            r.tau_rel_err,
+            "n/a" if r.qdd_rel_err is None else r.qdd_rel_err,
+            "n/a" if r.qdd_backward_err is None else r.qdd_backward_err,
+            r.pivots_rel_err,
+            r.kappa_max,
+        ]
+        for r in results
+    ]
+    print(table(headers, rows))
+    for r in results:
+        if r.note:
+            print(f"{r.robot}: {r.note}")
+    failed = sum(not r.passed for r in results)
+    print(f"{len(results) - failed}/{len(results)} passed (tolerance {results[0].tolerance:g})")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Cross-check each robot and print the worst errors."""
+    if not args.tolerance > 0:
+        raise InputError("--tolerance", "a number > 0", args.tolerance)
+    everything = "all" in args.robots
+    specs = list(example_robot_names()) if everything else args.robots
+    results: list[CrossCheckResult] = []
+    try:
+        for i, spec in enumerate(specs, 1):
+            print(f"crosscheck: [{i}/{len(specs)}] {spec}", file=sys.stderr)
+            try:
+                robot = load_robot(spec, floating=args.floating)
+            except RobotError as exc:
+                if not everything:
+                    raise
+                print(f"crosscheck: skipped {spec}: {exc.problem}", file=sys.stderr)
+                continue
+            results.append(
+                crosscheck_robot(
+                    robot, samples=args.samples, seed=args.seed, tolerance=args.tolerance
+                )
+            )
+    except KeyboardInterrupt:
+        if results:
+            _print(results, args.json)
+        raise
+    _print(results, args.json)
+    return 0 if all(r.passed for r in results) else 1
