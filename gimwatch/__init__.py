@@ -18,6 +18,8 @@ from gimwatch.conditioning import (
     pivot_ratio_forward,
     udut_pivots,
 )
+from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
+from gimwatch.denoc import DenocModel
 from gimwatch.errors import (
     ConditioningError,
     GimwatchError,
@@ -40,6 +42,8 @@ from gimwatch.robots import (
 __all__ = [
     "ChainSpec",
     "ConditioningError",
+    "CrossCheckResult",
+    "DenocModel",
     "GimAnalysis",
     "GimwatchError",
     "IllConditionedWarning",
@@ -56,6 +60,7 @@ __all__ = [
     "check_gim",
     "condition_estimate_1norm",
     "condition_number",
+    "crosscheck_robot",
     "diagonal_ratio",
     "eigenvalues",
     "example_robot_names",

@@ -99,3 +99,29 @@ def test_demo_writes_report(capsys, tmp_path):
     code, out, _ = run(capsys, "demo", "-o", str(tmp_path))
     assert code == 0
     assert (tmp_path / "report.md").exists() and "| 20 |" in out
+
+
+def test_crosscheck_command_json_and_exit_codes(capsys):
+    code, out, err = run(capsys, "crosscheck", "ur5", "chain:3", "--samples", "2", "--json")
+    records = json.loads(out)
+    assert code == 0 and [r["robot"] for r in records] == ["ur5", "chain_3"]
+    for key in ("nv", "samples", "gim_rel_err", "tau_rel_err", "qdd_rel_err", "pivots_rel_err"):
+        assert key in records[0]
+    assert records[0]["passed"] is True and records[0]["gim_rel_err"] < 1e-10
+    assert err.splitlines() == ["crosscheck: [1/2] ur5", "crosscheck: [2/2] chain:3"]
+    # agreement to round-off is not agreement to 1e-30: the check must be able to fail
+    code, out, _ = run(capsys, "crosscheck", "ur5", "--samples", "2", "--tolerance", "1e-30")
+    assert code == 1 and "ur5  FAIL" in out and "0/1 passed" in out
+    code, _, err = run(capsys, "crosscheck", "ur5", "--tolerance", "-1")
+    assert code == 2 and err == "gimwatch: error: --tolerance must be a number > 0, got -1.0\n"
+
+
+def test_crosscheck_all_skips_what_cannot_load_with_the_reason(capsys, monkeypatch):
+    import gimwatch.cli.crosscheck as command
+
+    monkeypatch.setattr(command, "example_robot_names", lambda: ("cassie", "iris", "romeo"))
+    code, out, err = run(capsys, "crosscheck", "all", "--samples", "1")
+    assert code == 0
+    assert "crosscheck: skipped cassie: example-robot-data ships it only as SDF" in err
+    assert "crosscheck: skipped iris: has no degree of freedom with a fixed base" in err
+    assert "romeo: M(q) is singular" in out and "1/1 passed" in out
