@@ -18,7 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from gimwatch.denoc.spatial import (
+    accumulate,
     body_mass_matrix,
+    cross,
     rodrigues,
     shift_mass_matrix,
     shift_twist,
@@ -132,7 +134,7 @@ def composite_mass_matrices(tree: BodyTree, kin: Kinematics) -> np.ndarray:
     composite = kin.M.copy()
     for level in reversed(tree.levels):
         shifted = shift_mass_matrix(composite[level], kin.offset[level])
-        np.add.at(composite, tree.parent[level], shifted)
+        accumulate(composite, tree.parent[level], shifted)
     return composite
 
 
@@ -194,16 +196,16 @@ def _motion(tree: BodyTree, kin: Kinematics, qd: np.ndarray, root_v: np.ndarray)
     if tree.floating:
         omega[0] = kin.rotation[0] @ root_v[3:]
         velocity[0] = kin.rotation[0] @ root_v[:3]
-        bias[0, 3:] = np.cross(omega[0], velocity[0])
+        bias[0, 3:] = cross(omega[0], velocity[0])
     for level in tree.levels:
         parent = tree.parent[level]
         w, r = omega[parent], kin.offset[level]
         axis_rate = kin.axis[level] * qd[level, None]
         rev, pri = kin.revolute[level, None], kin.prismatic[level, None]
         omega[level] = w + rev * axis_rate
-        velocity[level] = velocity[parent] + np.cross(w, r) + pri * axis_rate
-        bias[level, :3] = rev * np.cross(w, axis_rate)
-        bias[level, 3:] = np.cross(w, np.cross(w, r)) + pri * 2.0 * np.cross(w, axis_rate)
+        velocity[level] = velocity[parent] + cross(w, r) + pri * axis_rate
+        bias[level, :3] = rev * cross(w, axis_rate)
+        bias[level, 3:] = cross(w, cross(w, r)) + pri * 2.0 * cross(w, axis_rate)
     return _Motion(omega, velocity, bias)
 
 
@@ -212,9 +214,9 @@ def _body_bias(tree: BodyTree, kin: Kinematics, motion: _Motion) -> np.ndarray:
     com = np.einsum("kij,kj->ki", kin.rotation, tree.com)
     inertia = kin.rotation @ tree.inertia @ np.swapaxes(kin.rotation, 1, 2)
     w = motion.omega
-    centripetal = tree.mass[:, None] * np.cross(w, np.cross(w, com))
-    gyroscopic = np.cross(w, np.einsum("kij,kj->ki", inertia, w))
-    return np.hstack([gyroscopic + np.cross(com, centripetal), centripetal])
+    centripetal = tree.mass[:, None] * cross(w, cross(w, com))
+    gyroscopic = cross(w, np.einsum("kij,kj->ki", inertia, w))
+    return np.hstack([gyroscopic + cross(com, centripetal), centripetal])
 
 
 def _root_rate(gravity: np.ndarray) -> np.ndarray:
@@ -247,7 +249,7 @@ def inverse_dynamics(
         rate[level] = moved + kin.p[level] * qdd[level, None] + motion.bias[level]
     wrench = np.einsum("kij,kj->ki", kin.M, rate) + _body_bias(tree, kin, motion)
     for level in reversed(tree.levels):
-        np.add.at(wrench, tree.parent[level], shift_wrench(wrench[level], kin.offset[level]))
+        accumulate(wrench, tree.parent[level], shift_wrench(wrench[level], kin.offset[level]))
     tau = np.einsum("ki,ki->k", kin.p[1:], wrench[1:])
     if tree.floating:
         tau = np.concatenate([kin.p_root.T @ wrench[0], tau])
@@ -298,7 +300,7 @@ def forward_dynamics(
         d = np.einsum("ki,ki->k", p, U[level])
         pivots[level] = d
         passed = articulated[level] - U[level][:, :, None] * U[level][:, None, :] / d[:, None, None]
-        np.add.at(articulated, parent, shift_mass_matrix(passed, r))
+        accumulate(articulated, parent, shift_mass_matrix(passed, r))
         if dynamic:
             phi[level] -= np.einsum("ki,ki->k", p, bias[level])
             carried = (
@@ -306,7 +308,7 @@ def forward_dynamics(
                 + np.einsum("kij,kj->ki", passed, motion.bias[level])
                 + U[level] * (phi[level] / d)[:, None]
             )
-            np.add.at(bias, parent, shift_wrench(carried, r))
+            accumulate(bias, parent, shift_wrench(carried, r))
     root_D = kin.p_root.T @ articulated[0] @ kin.p_root if tree.floating else None
     body_pivots = pivots[1:]
     if tree.floating:

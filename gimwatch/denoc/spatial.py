@@ -11,13 +11,30 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "accumulate",
     "body_mass_matrix",
+    "cross",
     "rodrigues",
     "shift_mass_matrix",
     "shift_twist",
     "shift_wrench",
     "skew",
 ]
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a × b`` over the last axis (np.cross without its per-call overhead on tiny arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def accumulate(target: np.ndarray, index: np.ndarray, values: np.ndarray) -> None:
+    """``target[index] += values`` with repeated indices summed (np.add.at, fast path for 1)."""
+    if len(index) == 1:
+        target[index[0]] += values[0]
+    else:
+        np.add.at(target, index, values)
 
 
 def skew(r: np.ndarray) -> np.ndarray:
@@ -47,7 +64,7 @@ def shift_twist(t: np.ndarray, r: np.ndarray) -> np.ndarray:
     ``A = [[1, 0], [−[r]×, 1]]`` (Saha's twist-propagation matrix), i.e. ``v' = v + ω × r``.
     """
     out = np.array(t, dtype=float, copy=True)
-    out[..., 3:] += np.cross(t[..., :3], r)
+    out[..., 3:] += cross(t[..., :3], r)
     return out
 
 
@@ -57,7 +74,7 @@ def shift_wrench(w: np.ndarray, r: np.ndarray) -> np.ndarray:
     ``Aᵀ = [[1, [r]×], [0, 1]]``, i.e. ``n' = n + r × f``.
     """
     out = np.array(w, dtype=float, copy=True)
-    out[..., :3] += np.cross(r, w[..., 3:])
+    out[..., :3] += cross(r, w[..., 3:])
     return out
 
 
