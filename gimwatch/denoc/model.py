@@ -147,6 +147,16 @@ class DenocModel:
         """Diag M(q) = (p_iᵀ M̃_i p_i) in O(n) (Shah & Saha 2013, Eq. 13)."""
         return self._to_public(recursions.gim_diagonal(self.tree, self._kinematics(q)))
 
+    def composite_mass_matrices(self, q: npt.ArrayLike) -> dict[str, np.ndarray]:
+        """M̃_i (6×6, ``[ω; v]`` order, about the body origin, world axes) per joint (Eq. 12).
+
+        The root body's is keyed ``root_joint`` when floating (it is the whole robot's).
+        """
+        composite = recursions.composite_mass_matrices(self.tree, self._kinematics(q))
+        start = 0 if self.tree.floating else 1
+        names = self.tree.joint_names
+        return {names[i]: composite[i] for i in range(start, self.tree.size)}
+
     # -- dynamics ---------------------------------------------------------------------
     def inverse_dynamics(
         self,
