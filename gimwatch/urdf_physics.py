@@ -42,7 +42,7 @@ __all__ = [
 SUPPORTED_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 _UNSUPPORTED_JOINT_TYPES = {
     "planar": "use two prismatic joints and a revolute one",
-    "floating": "remove it and load the robot with a floating base (--floating)",
+    "floating": "remove it and add a free base with --floating",
 }
 _LIMITED = ("revolute", "prismatic")
 #: Negative principal moments of inertia smaller than this (plus the relative part) are
