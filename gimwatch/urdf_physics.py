@@ -200,6 +200,8 @@ def check_joint_values(joint: ET.Element, source: str) -> None:
     _check_limit(joint, kind, source=source, where=where)
     dynamics = joint.find("dynamics")
     if dynamics is not None:
+        if dynamics.get("damping") is None and dynamics.get("friction") is None:
+            raise URDFError(source, "<dynamics> has neither damping nor friction", element=where)
         for key in ("damping", "friction"):
             _number(dynamics, key, source=source, where=where, default=0.0)
     mimic = joint.find("mimic")
