@@ -99,11 +99,7 @@ class Robot:
     def new_data(self) -> pin.Data:
         """A fresh :class:`pinocchio.Data`; refuses models whose Data would not fit in memory."""
         if self.nv > DATA_NV_LIMIT:
-            raise RobotError(
-                self.spec,
-                f"nv = {self.nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
-                f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
-            )
+            raise _too_large(self.spec, self.nv)
         return self.model.createData()
 
 
@@ -193,12 +189,22 @@ def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     return model
 
 
-def load_robot(spec: str | Path, floating: bool = False) -> Robot:
+def _too_large(spec: str, nv: int) -> RobotError:
+    return RobotError(
+        spec,
+        f"nv = {nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
+        f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
+    )
+
+
+def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None = None) -> Robot:
     """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
 
     Args:
         spec: The robot specification (see the module docstring).
         floating: Add a free-flyer root joint (6 DoF) instead of fixing the base.
+        max_nv: Refuse generated chains with more velocity coordinates than this before
+            building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
 
     Returns:
         The loaded :class:`Robot`.
@@ -218,6 +224,8 @@ def load_robot(spec: str | Path, floating: bool = False) -> Robot:
         except ValueError:
             raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
         chain = chain_spec(n)
+        if max_nv is not None and n + 6 * floating > max_nv:
+            raise _too_large(text, n + 6 * floating)
         xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
     elif text in _example_robots():
         path = _example_robot_urdf(text)

@@ -252,6 +252,8 @@ BAD_ARGUMENTS = [
     (["analyze", "chain:abc"], "the N of chain:N must be a positive integer, got 'abc'"),
     (["analyze", "chain:10000000"], "the number of links must be an integer between 1"),
     (["analyze", "chain:401"], "nv = 401 is too large for Pinocchio's Data"),
+    (["analyze", "chain:1000000"], "nv = 1000000 is too large for Pinocchio's Data"),
+    (["analyze", "chain:396", "--floating"], "nv = 402 is too large for Pinocchio's Data"),
     (["analyze", "nope"], "robot 'nope': not chain:N"),
     (["analyze"], "the following arguments are required: robot"),
     ([], "the following arguments are required: command"),

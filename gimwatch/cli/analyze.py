@@ -8,7 +8,7 @@ from gimwatch.analysis import analyze_configuration
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.errors import InputError
 from gimwatch.results import to_json
-from gimwatch.robots import load_robot, neutral_configuration, random_configurations
+from gimwatch.robots import DATA_NV_LIMIT, load_robot, neutral_configuration, random_configurations
 
 NAME = "analyze"
 #: More configurations than this would print a table nobody reads; use ``survey``.
@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--q and --random", "used one at a time", "both")
     if args.random is not None and args.random > MAX_RANDOM:
         raise InputError("--random", f"at most {MAX_RANDOM}", args.random)
-    robot = load_robot(args.robot, floating=args.floating)
+    robot = load_robot(args.robot, floating=args.floating, max_nv=DATA_NV_LIMIT)
     if args.random is not None:
         configurations = random_configurations(robot, args.random, seed=args.seed)
     elif args.q is not None:
