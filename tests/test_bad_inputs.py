@@ -131,12 +131,22 @@ def test_every_command_is_in_the_corpus():
     assert "analyze" in ROBOT_COMMANDS
 
 
+def _file_cases() -> list[pytest.param]:
+    """Every (command, corpus file) pair: robot commands x urdf/, scene commands x scenes/."""
+    return [
+        pytest.param(argv, key, entry, id=f"{name}-{key}")
+        for folder, commands in (("urdf", ROBOT_COMMANDS), ("scenes", SCENE_COMMANDS))
+        for name, argv in sorted(commands.items())
+        for key, entry in sorted(MANIFEST.items())
+        if key.startswith(f"{folder}/")
+    ]
+
+
 @pytest.mark.usefixtures("hang_guard")
-@pytest.mark.parametrize("command", sorted(ROBOT_COMMANDS))
-@pytest.mark.parametrize(("key", "entry"), _cases("urdf"))
-def test_bad_urdf_file(command, key, entry, tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize(("make_argv", "key", "entry"), _file_cases())
+def test_bad_file(make_argv, key, entry, tmp_path, capsys, monkeypatch):
     path = str(BAD / key)
-    argv = ROBOT_COMMANDS[command](path, tmp_path / "out")
+    argv = make_argv(path, tmp_path / "out")
     code, out, err = _run_in(tmp_path, argv, capsys, monkeypatch)
     if entry.get("outcome") == "warning":
         assert code == 0, err
