@@ -70,7 +70,8 @@ def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAn
     massless = [robot.dof_names[k] for k in np.flatnonzero(~(np.diag(M) > 0))]
     if massless:
         raise ConditioningError(
-            f"M(q) of {robot.name} is singular: {len(massless)} coordinate(s) move no mass "
+            f"{robot.source}: M(q) of {robot.name} is singular: "
+            f"{len(massless)} coordinate(s) move no mass "
             f"({', '.join(massless[:4])}{', ...' if len(massless) > 4 else ''}); "
             "give the links they move an <inertial>"
         )

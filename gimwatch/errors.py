@@ -13,10 +13,12 @@ __all__ = [
     "GimwatchError",
     "IllConditionedWarning",
     "InputError",
+    "OutputError",
     "RobotError",
     "SceneError",
     "SimulationError",
     "URDFError",
+    "URDFWarning",
 ]
 
 
@@ -83,6 +85,22 @@ class SimulationError(GimwatchError):
         self.time_s = time_s
         self.cause = cause
         super().__init__(f"simulation stopped at t = {time_s:.6g} s: {cause}")
+
+
+class OutputError(GimwatchError):
+    """A results file or folder that cannot be written: ``path: problem``."""
+
+    def __init__(self, path: str, problem: str) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{path}: {problem}")
+
+
+class URDFWarning(UserWarning):
+    """A URDF value Pinocchio accepts but no physical body has; results from it are suspect.
+
+    Example: principal moments of inertia that violate the triangle inequality.
+    """
 
 
 class IllConditionedWarning(UserWarning):

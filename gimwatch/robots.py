@@ -13,8 +13,12 @@ nv = 300), so callers ask for it with :meth:`Robot.new_data` only when they need
 
 from __future__ import annotations
 
+import contextlib
 import difflib
+import os
 import re
+import tempfile
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
@@ -39,6 +43,10 @@ _CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
 DATA_NV_LIMIT = 400
 _DEFAULT_ANGLE_RAD = np.pi
 _DEFAULT_TRANSLATION_M = 1.0
+#: The largest URDF file read (the biggest example-robot-data URDF is under 1 MB).
+MAX_URDF_BYTES = 64 * 1024 * 1024
+#: random_configurations refuses to allocate more numbers than this (400 MB).
+MAX_RANDOM_NUMBERS = 50_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,11 +99,7 @@ class Robot:
     def new_data(self) -> pin.Data:
         """A fresh :class:`pinocchio.Data`; refuses models whose Data would not fit in memory."""
         if self.nv > DATA_NV_LIMIT:
-            raise RobotError(
-                self.spec,
-                f"nv = {self.nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
-                f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
-            )
+            raise _too_large(self.spec, self.nv)
         return self.model.createData()
 
 
@@ -118,38 +122,89 @@ def _example_robot_urdf(name: str) -> Path:
     if not loader.urdf_filename:
         raise RobotError(name, "example-robot-data ships it only as SDF; gimwatch reads URDF")
     relative = str(Path(loader.path) / loader.urdf_subpath / loader.urdf_filename)
-    return Path(getModelPath(relative)) / relative
+    return (Path(getModelPath(relative)) / relative).resolve()
 
 
 def _read_urdf(path: Path) -> str:
-    if not path.exists():
-        raise URDFError(str(path), "no such file")
-    if path.is_dir():
-        raise URDFError(str(path), "is a directory, not a URDF file")
+    """Read a URDF file; FIFOs and devices are refused (they could block or never end)."""
     try:
+        if not path.exists():
+            raise URDFError(str(path), "no such file")
+        if path.is_dir():
+            raise URDFError(str(path), "is a directory, not a URDF file")
+        if not path.is_file():
+            raise URDFError(str(path), "is not a regular file (a device, FIFO or socket)")
+        size = path.stat().st_size
+        if size > MAX_URDF_BYTES:
+            raise URDFError(str(path), f"is {size} bytes, more than {MAX_URDF_BYTES} for a URDF")
         return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise URDFError(str(path), f"cannot be read ({exc})") from exc
+    except UnicodeDecodeError as exc:
+        raise URDFError(str(path), f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
+    except OSError as exc:
+        raise URDFError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
+
+
+@contextlib.contextmanager
+def _captured_stderr_fd() -> Iterator[list[str]]:
+    """Capture what C++ code (urdfdom's console_bridge) writes to file descriptor 2.
+
+    Yields a list that holds the captured lines once the block has ended.
+    """
+    lines: list[str] = []
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr to protect
+        yield lines
+        return
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield lines
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            text = sink.read().decode("utf-8", "replace")
+            lines.extend(line.strip() for line in text.splitlines() if line.strip())
 
 
 def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     from gimwatch.urdf import check_urdf
 
     check_urdf(xml, source)
-    try:
-        if floating:
-            return pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
-        return pin.buildModelFromXML(xml)
-    except (RuntimeError, ValueError) as exc:
-        raise URDFError(source, f"Pinocchio cannot build a model: {exc}") from exc
+    # check_urdf reads every value urdfdom reads; should urdfdom still complain, its lines
+    # become the error message instead of stray output on the user's terminal.
+    with _captured_stderr_fd() as complaints:
+        try:
+            if floating:
+                model = pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
+            else:
+                model = pin.buildModelFromXML(xml)
+        except (RuntimeError, ValueError) as exc:
+            model, failure = None, exc
+    errors = [line for line in complaints if line.startswith("Error:")]
+    if model is None or errors:
+        detail = errors[0].removeprefix("Error:").strip() if errors else str(failure)
+        raise URDFError(source, f"Pinocchio cannot build a model: {detail}")
+    return model
 
 
-def load_robot(spec: str | Path, floating: bool = False) -> Robot:
+def _too_large(spec: str, nv: int) -> RobotError:
+    return RobotError(
+        spec,
+        f"nv = {nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
+        f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
+    )
+
+
+def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None = None) -> Robot:
     """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
 
     Args:
         spec: The robot specification (see the module docstring).
         floating: Add a free-flyer root joint (6 DoF) instead of fixing the base.
+        max_nv: Refuse generated chains with more velocity coordinates than this before
+            building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
 
     Returns:
         The loaded :class:`Robot`.
@@ -159,6 +214,8 @@ def load_robot(spec: str | Path, floating: bool = False) -> Robot:
         URDFError: The URDF file is missing, unreadable or invalid.
     """
     text = str(spec)
+    if not text.strip():
+        raise InputError("the robot", "chain:N, a URDF path or an example-robot-data name", text)
     chain = None
     match = _CHAIN_SPEC.match(text)
     if match:
@@ -167,6 +224,8 @@ def load_robot(spec: str | Path, floating: bool = False) -> Robot:
         except ValueError:
             raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
         chain = chain_spec(n)
+        if max_nv is not None and n + 6 * floating > max_nv:
+            raise _too_large(text, n + 6 * floating)
         xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
     elif text in _example_robots():
         path = _example_robot_urdf(text)
@@ -220,6 +279,13 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise InputError("count", "a positive integer", count)
+    if count * robot.nq > MAX_RANDOM_NUMBERS:
+        limit = MAX_RANDOM_NUMBERS // robot.nq
+        raise InputError("count", f"at most {limit} for {robot.name} (nq = {robot.nq})", count)
+    if seed is not None and (
+        isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0
+    ):
+        raise InputError("seed", "None or an integer >= 0", seed)
     model = robot.model
     rng = np.random.default_rng(seed)
     lower = np.array(model.lowerPositionLimit, dtype=float)

@@ -7,9 +7,11 @@ name the file and the element. It imports no dynamics library, so DeNOC can use 
 
 from __future__ import annotations
 
+import warnings
 import xml.etree.ElementTree as ET
 
-from gimwatch.errors import URDFError
+from gimwatch.errors import URDFError, URDFWarning
+from gimwatch.urdf_physics import check_joint_values, check_link_values
 
 __all__ = ["check_urdf", "parse_urdf_xml"]
 
@@ -38,9 +40,15 @@ def parse_urdf_xml(xml: str, source: str) -> ET.Element:
 def check_urdf(xml: str, source: str) -> ET.Element:
     """Check the structure of URDF text and return its ``<robot>`` element.
 
+    Then every value urdfdom reads is checked (see :mod:`gimwatch.urdf_physics`).
+
     Raises:
-        URDFError: The text is not well-formed XML, not a URDF, or its links and joints do
-            not form a tree.
+        URDFError: The text is not well-formed XML, not a URDF, its links and joints do
+            not form a tree, or a value is missing, malformed or physically impossible.
+
+    Warns:
+        URDFWarning: Once per file, naming the links whose principal moments of inertia
+            violate the triangle inequality.
     """
     root = parse_urdf_xml(xml, source)
     links = [link.get("name") for link in root.findall("link")]
@@ -91,6 +99,21 @@ def check_urdf(xml: str, source: str) -> ET.Element:
         stray = sorted(seen - reached)[:4]
         raise URDFError(
             source, f"the links form a cycle not attached to the root: {', '.join(stray)}"
+        )
+    doubtful = [
+        link.get("name") for link in root.findall("link") if not check_link_values(link, source)
+    ]
+    for joint in root.findall("joint"):
+        check_joint_values(joint, source)
+    if doubtful:
+        shown = ", ".join(doubtful[:4]) + (", ..." if len(doubtful) > 4 else "")
+        warnings.warn(
+            URDFWarning(
+                f"{source}: {len(doubtful)} link(s) have principal moments of inertia that "
+                f"violate the triangle inequality a + b >= c ({shown}); no rigid body has "
+                "such an inertia, so the GIM computed from it is suspect"
+            ),
+            stacklevel=2,
         )
     return root
 

@@ -278,23 +278,23 @@ def _two_links(kind, axis="0 0 1", mass="1.0"):
     [
         (
             _two_links("planar"),
-            "<string>: joint 'j1': joint type 'planar' is not supported by DeNOC "
-            "(revolute, continuous, prismatic or fixed)",
+            "<string>: joint 'j1': joint type 'planar' is not supported by gimwatch "
+            "(use two prismatic joints and a revolute one)",
         ),
         (
             _two_links("floating"),
-            "<string>: joint 'j1': joint type 'floating' is not supported by DeNOC "
-            "(revolute, continuous, prismatic or fixed)",
+            "<string>: joint 'j1': joint type 'floating' is not supported by gimwatch "
+            "(remove it and add a free base with --floating)",
         ),
         (
             _two_links("revolute", axis="0 0 0"),
-            "<string>: joint 'j1': axis must be non-zero, got [0.0, 0.0, 0.0]",
+            "<string>: joint 'j1': <axis xyz> must be a non-zero vector, got '0 0 0'",
         ),
         (
             _two_links("revolute", axis="0 nan 1"),
-            "<string>: joint 'j1': axis must be finite, got [0.0, nan, 1.0]",
+            "<string>: joint 'j1': <axis xyz> must be finite, got '0 nan 1'",
         ),
-        (_two_links("revolute", mass="-2"), "<string>: link 'b': mass must be >= 0, got -2.0"),
+        (_two_links("revolute", mass="-2"), "<string>: link 'b': mass must be >= 0 kg, got -2.0"),
         (
             '<robot name="r"><link name="a"/><link name="b"/>'
             + _joint("j1", "revolute", "a", "b")

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 from types import ModuleType
 
@@ -51,21 +52,47 @@ def get_argument_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line and return its exit status."""
-    from threadpoolctl import threadpool_limits
+    """Run the command line and return its exit status.
 
+    Warnings print as one ``gimwatch: warning: ...`` line each; errors gimwatch raises on
+    purpose as one ``gimwatch: error: ...`` line, with exit status 2.
+    """
     try:
-        args = get_argument_parser().parse_args(argv)
-        # GIMs are small dense matrices: multi-threaded OpenBLAS makes their eigen-solves
-        # 20-40x slower on 2 cores, so the command line keeps BLAS on one thread.
-        with threadpool_limits(limits=1, user_api="blas"):
-            return int(args.run(args))
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            _shown.clear()
+            return _run(argv)
     except GimwatchError as exc:
         print(f"gimwatch: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("gimwatch: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+_shown: set[str] = set()
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Print a warning as one line on stderr (no source location: users did not write it).
+
+    The same text is printed once per run: the URDF checks run again when DeNOC reads the
+    file that Pinocchio read.
+    """
+    text = f"gimwatch: warning: {message}"
+    if text not in _shown:
+        _shown.add(text)
+        print(text, file=sys.stderr)
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    from threadpoolctl import threadpool_limits
+
+    args = get_argument_parser().parse_args(argv)
+    # GIMs are small dense matrices: multi-threaded OpenBLAS makes their eigen-solves
+    # 20-40x slower on 2 cores, so the command line keeps BLAS on one thread.
+    with threadpool_limits(limits=1, user_api="blas"):
+        return int(args.run(args))
 
 
 def _entry_point() -> None:  # console script

@@ -5,12 +5,14 @@ from __future__ import annotations
 import argparse
 
 from gimwatch.analysis import analyze_configuration
-from gimwatch.cli._format import positive_int, table
+from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.errors import InputError
 from gimwatch.results import to_json
-from gimwatch.robots import load_robot, neutral_configuration, random_configurations
+from gimwatch.robots import DATA_NV_LIMIT, load_robot, neutral_configuration, random_configurations
 
 NAME = "analyze"
+#: More configurations than this would print a table nobody reads; use ``survey``.
+MAX_RANDOM = 100_000
 HELP = "conditioning of M(q): kappa, diagonal ratio, pivot ratios, spectrum"
 
 
@@ -30,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="K",
         help="analyse K random configurations within the joint limits",
     )
-    parser.add_argument("--seed", type=int, default=0, help="seed of the random draws")
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
     parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
@@ -39,7 +41,9 @@ def run(args: argparse.Namespace) -> int:
     """Analyse and print."""
     if args.q is not None and args.random is not None:
         raise InputError("--q and --random", "used one at a time", "both")
-    robot = load_robot(args.robot, floating=args.floating)
+    if args.random is not None and args.random > MAX_RANDOM:
+        raise InputError("--random", f"at most {MAX_RANDOM}", args.random)
+    robot = load_robot(args.robot, floating=args.floating, max_nv=DATA_NV_LIMIT)
     if args.random is not None:
         configurations = random_configurations(robot, args.random, seed=args.seed)
     elif args.q is not None:

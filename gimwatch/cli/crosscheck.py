@@ -69,17 +69,21 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--tolerance", "a number > 0", args.tolerance)
     everything = "all" in args.robots
     specs = list(example_robot_names()) if everything else args.robots
+    # Load every named robot first, so that bad input fails with one line before any work.
+    robots = [] if everything else [load_robot(spec, floating=args.floating) for spec in specs]
     results: list[CrossCheckResult] = []
     try:
         for i, spec in enumerate(specs, 1):
-            print(f"crosscheck: [{i}/{len(specs)}] {spec}", file=sys.stderr)
-            try:
-                robot = load_robot(spec, floating=args.floating)
-            except RobotError as exc:
-                if not everything:
-                    raise
-                print(f"crosscheck: skipped {spec}: {exc.problem}", file=sys.stderr)
-                continue
+            if len(specs) > 1:
+                print(f"crosscheck: [{i}/{len(specs)}] {spec}", file=sys.stderr)
+            if everything:
+                try:
+                    robot = load_robot(spec, floating=args.floating)
+                except RobotError as exc:
+                    print(f"crosscheck: skipped {spec}: {exc.problem}", file=sys.stderr)
+                    continue
+            else:
+                robot = robots[i - 1]
             results.append(
                 crosscheck_robot(
                     robot, samples=args.samples, seed=args.seed, tolerance=args.tolerance

@@ -1,0 +1,344 @@
+"""The bad-input corpus: every command, every bad file or argument -> one line, exit 2.
+
+Cases come from three places:
+
+* files under ``tests/data/bad/`` with their expected message in ``MANIFEST.toml``;
+* paths made at test time (missing file, directory, FIFO, device, oversized file);
+* bad command lines (:data:`BAD_ARGUMENTS`).
+
+A command that takes a ROBOT or a SCENE joins the corpus with one line in
+:data:`ROBOT_COMMANDS` or :data:`SCENE_COMMANDS`; ``test_every_command_is_in_the_corpus``
+fails until it does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import tomllib
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from gimwatch.analysis import analyze_configuration
+from gimwatch.cli import _commands, get_argument_parser, main
+from gimwatch.errors import GimwatchError, URDFWarning
+from gimwatch.robots import MAX_URDF_BYTES, load_robot, neutral_configuration
+
+BAD = Path(__file__).parent / "data" / "bad"
+MANIFEST = tomllib.loads((BAD / "MANIFEST.toml").read_text())
+REPO = Path(__file__).parent.parent
+
+#: How each command is called on one bad ROBOT (or SCENE) with an output folder ``out``
+#: that must not be created. Commands not registered yet in the CLI are left out.
+_ROBOT_ARGV: dict[str, Callable[[str, Path], list[str]]] = {
+    "analyze": lambda robot, out: ["analyze", robot],
+    "crosscheck": lambda robot, out: ["crosscheck", robot],
+    "survey": lambda robot, out: ["survey", robot, "-o", str(out)],
+}
+_SCENE_ARGV: dict[str, Callable[[str, Path], list[str]]] = {
+    "simulate": lambda scene, out: ["simulate", scene, "-o", str(out)],
+}
+ROBOT_COMMANDS = {name: argv for name, argv in _ROBOT_ARGV.items() if name in _commands()}
+SCENE_COMMANDS = {name: argv for name, argv in _SCENE_ARGV.items() if name in _commands()}
+
+#: Seconds after which a case counts as a hang (a guard, not a timing).
+HANG_LIMIT_S = 60
+
+
+def _cases(folder: str) -> list[pytest.param]:
+    return [
+        pytest.param(key, entry, id=key.removeprefix(f"{folder}/"))
+        for key, entry in sorted(MANIFEST.items())
+        if key.startswith(f"{folder}/")
+    ]
+
+
+def _subcommand_positionals() -> dict[str, set[str]]:
+    parser = get_argument_parser()
+    (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return {
+        name: {a.dest for a in command._actions if not a.option_strings}
+        for name, command in sub.choices.items()
+    }
+
+
+@pytest.fixture
+def hang_guard():
+    """Turn a hang into a test failure after HANG_LIMIT_S (SIGALRM, main thread only)."""
+
+    def alarm(signum, frame):
+        raise TimeoutError(f"still running after {HANG_LIMIT_S} s")
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, HANG_LIMIT_S)
+    yield
+    signal.setitimer(signal.ITIMER_REAL, 0)
+    signal.signal(signal.SIGALRM, previous)
+
+
+def _snapshot(folder: Path) -> dict[str, tuple[int, bytes]]:
+    return {
+        str(p.relative_to(folder)): (p.stat().st_mtime_ns, p.read_bytes() if p.is_file() else b"")
+        for p in sorted(folder.rglob("*"))
+    }
+
+
+def _run_in(folder: Path, argv: list[str], capsys, monkeypatch) -> tuple[int, str, str]:
+    """Run ``main(argv)`` in ``folder`` (holding a good result) and check nothing was written."""
+    monkeypatch.chdir(folder)
+    good = folder / "good.json"
+    good.write_text('{"kappa": 1.0}\n')
+    before = _snapshot(folder)
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert _snapshot(folder) == before, "a failed run created or changed a file"
+    return code, out, err
+
+
+def _assert_one_error_line(code: int, out: str, err: str, *fragments: str) -> None:
+    assert code == 2, (code, err)
+    assert err.count("\n") == 1 and err.startswith("gimwatch: error: "), err
+    assert "Traceback" not in err and out == "", (out, err)
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+
+
+def test_manifest_lists_every_file_and_every_entry_exists():
+    on_disk = {
+        str(p.relative_to(BAD))
+        for p in BAD.rglob("*")
+        if p.is_file() and p.name not in ("MANIFEST.toml", "README.md", ".gitkeep")
+    }
+    assert on_disk == set(MANIFEST)
+    for key, entry in MANIFEST.items():
+        assert set(entry) <= {"expect", "outcome", "valid_for"} and entry["expect"], key
+        assert entry.get("outcome", "error") in ("error", "warning"), key
+        assert key.split("/")[0] in ("urdf", "scenes"), key
+
+
+def test_every_command_is_in_the_corpus():
+    for name, positionals in _subcommand_positionals().items():
+        if positionals & {"robot", "robots"}:
+            assert name in ROBOT_COMMANDS, f"add {name} to _ROBOT_ARGV"
+        if positionals & {"scene", "scenes"}:
+            assert name in SCENE_COMMANDS, f"add {name} to _SCENE_ARGV"
+    assert "analyze" in ROBOT_COMMANDS
+
+
+def _file_cases() -> list[pytest.param]:
+    """Every (command, corpus file) pair: robot commands x urdf/, scene commands x scenes/."""
+    return [
+        pytest.param(name, argv, key, entry, id=f"{name}-{key}")
+        for folder, commands in (("urdf", ROBOT_COMMANDS), ("scenes", SCENE_COMMANDS))
+        for name, argv in sorted(commands.items())
+        for key, entry in sorted(MANIFEST.items())
+        if key.startswith(f"{folder}/")
+    ]
+
+
+@pytest.mark.usefixtures("hang_guard")
+@pytest.mark.parametrize(("command", "make_argv", "key", "entry"), _file_cases())
+def test_bad_file(command, make_argv, key, entry, tmp_path, capsys, monkeypatch):
+    path = str(BAD / key)
+    argv = make_argv(path, tmp_path / "out")
+    code, out, err = _run_in(tmp_path, argv, capsys, monkeypatch)
+    if command in entry.get("valid_for", []):
+        assert code == 0 and err == "" and "singular" in out, (code, err)
+        return
+    if entry.get("outcome") == "warning":
+        assert code == 0, err
+        assert err.count("\n") == 1 and err.startswith("gimwatch: warning: "), err
+        assert path in err and entry["expect"] in err, err
+        return
+    _assert_one_error_line(code, out, err, path, entry["expect"])
+
+
+@pytest.mark.usefixtures("hang_guard")
+@pytest.mark.parametrize(("key", "entry"), _cases("urdf"))
+def test_bad_urdf_file_raises_a_gimwatch_error_for_library_users(key, entry, capsys):
+    path = BAD / key
+    if entry.get("outcome") == "warning":
+        with pytest.warns(URDFWarning, match="triangle inequality"):
+            robot = load_robot(path)
+        assert analyze_configuration(robot, neutral_configuration(robot)).kappa > 1
+        return
+    with pytest.raises(GimwatchError) as info:
+        robot = load_robot(path)
+        analyze_configuration(robot, neutral_configuration(robot))
+    main(["analyze", str(path)])
+    assert capsys.readouterr().err == f"gimwatch: error: {info.value}\n"
+    assert entry["expect"] in str(info.value)
+
+
+def _fifo(tmp: Path) -> str:
+    os.mkfifo(tmp / "pipe.urdf")
+    return str(tmp / "pipe.urdf")
+
+
+def _sparse(tmp: Path) -> str:
+    with open(tmp / "huge.urdf", "wb") as handle:
+        handle.truncate(MAX_URDF_BYTES + 1)
+    return str(tmp / "huge.urdf")
+
+
+def _under_a_file(tmp: Path) -> str:
+    (tmp / "plain.urdf").write_text("<robot/>")
+    return str(tmp / "plain.urdf" / "robot.urdf")
+
+
+#: Robot paths made at test time: (id, maker(tmp folder) -> path, expected fragment).
+BAD_PATHS = [
+    ("missing_file", lambda tmp: str(tmp / "missing.urdf"), "missing.urdf: no such file"),
+    ("missing_folder", lambda tmp: str(tmp / "nowhere/"), "nowhere: no such file"),
+    ("directory", lambda tmp: str(tmp), "is a directory, not a URDF file"),
+    (
+        "directory_named_urdf",
+        lambda tmp: str((tmp / "d.urdf").mkdir() or tmp / "d.urdf"),
+        "d.urdf: is a directory",
+    ),
+    ("fifo", _fifo, "pipe.urdf: is not a regular file"),
+    ("device", lambda tmp: "/dev/zero", "/dev/zero: is not a regular file"),
+    ("oversized", _sparse, f"more than {MAX_URDF_BYTES} for a URDF"),
+    ("path_under_a_file", _under_a_file, "robot.urdf: no such file"),
+    ("empty_spec", lambda tmp: "", "the robot must be chain:N, a URDF path"),
+    ("blank_spec", lambda tmp: "  ", "the robot must be chain:N, a URDF path"),
+]
+
+
+@pytest.mark.usefixtures("hang_guard")
+@pytest.mark.parametrize("command", sorted(ROBOT_COMMANDS))
+@pytest.mark.parametrize(("maker", "expect"), [pytest.param(m, e, id=i) for i, m, e in BAD_PATHS])
+def test_bad_robot_path(command, maker, expect, tmp_path, capsys, monkeypatch):
+    work = tmp_path / "work"
+    work.mkdir()
+    target = maker(tmp_path)
+    argv = ROBOT_COMMANDS[command](target, work / "out")
+    code, out, err = _run_in(work, argv, capsys, monkeypatch)
+    _assert_one_error_line(code, out, err, expect)
+
+
+#: Bad command lines; ``{tmp}`` is the test's folder, which holds ``good.json``.
+BAD_ARGUMENTS = [
+    (["chain", "0"], "argument n: must be a positive integer, got '0'"),
+    (["chain", "-1"], "argument n: must be a positive integer, got '-1'"),
+    (["chain", "two"], "argument n: must be a positive integer, got 'two'"),
+    (["chain", "1.5"], "argument n: must be a positive integer, got '1.5'"),
+    (["chain", "10000000"], "the number of links must be an integer between 1 and 1000000"),
+    (["chain", "3", "--mass", "-1"], "masses_kg[0] must be finite and > 0, got -1.0"),
+    (["chain", "3", "--mass", "nan"], "masses_kg[0] must be finite and > 0, got nan"),
+    (["chain", "3", "--mass", "heavy"], "argument --mass: must be a number or a comma-separated"),
+    (
+        ["chain", "3", "--mass", "1,2"],
+        "mass_kg must be a number or a list of 3 numbers, got [1.0, 2.0]",
+    ),
+    (["chain", "3", "--length", "0"], "lengths_m[0] must be finite and > 0, got 0.0"),
+    (["chain", "3", "--radius", "-0.1"], "radii_m[0] must be finite and >= 0, got -0.1"),
+    (["chain", "3", "--axes", "w"], "axes must be a list of 3 axes, got ['w']"),
+    (["chain", "3", "--joint-types", "hinge"], "joint_types[0] must be one of"),
+    (["chain", "0", "-o", "{tmp}/good.json"], "must be a positive integer"),
+    (["chain", "3", "-o", "{tmp}"], "is a directory; give a file name"),
+    (["chain", "3", "-o", "{tmp}/good.json/c.urdf"], "c.urdf: cannot be written"),
+    (["analyze", "ur5", "--q", "0.1"], "--q must be 6 numbers for ur5, got 1"),
+    (["analyze", "chain:2", "--q", "0.1", "nan"], "q must be finite"),
+    (["analyze", "chain:2", "--q", "0.1", "1e400"], "q must be finite"),
+    (["analyze", "chain:2", "--q", "a", "b"], "argument --q: invalid float value: 'a'"),
+    (["analyze", "chain:2", "--random", "0"], "argument --random: must be a positive integer"),
+    (["analyze", "chain:2", "--random", "-1"], "argument --random: must be a positive integer"),
+    (["analyze", "chain:2", "--random", "1000000000"], "--random must be at most 100000"),
+    (
+        ["analyze", "chain:2", "--random", "2", "--seed", "-1"],
+        "argument --seed: must be an integer >= 0",
+    ),
+    (["analyze", "chain:2", "--seed", "x"], "argument --seed: must be an integer >= 0"),
+    (
+        ["analyze", "ur5", "--q", "1", "--random", "2"],
+        "--q and --random must be used one at a time",
+    ),
+    (["analyze", "chain:0"], "the number of links must be an integer between 1"),
+    (["analyze", "chain:-3"], "the number of links must be an integer between 1"),
+    (["analyze", "chain:abc"], "the N of chain:N must be a positive integer, got 'abc'"),
+    (["analyze", "chain:10000000"], "the number of links must be an integer between 1"),
+    (["analyze", "chain:401"], "nv = 401 is too large for Pinocchio's Data"),
+    (["analyze", "chain:1000000"], "nv = 1000000 is too large for Pinocchio's Data"),
+    (["analyze", "chain:396", "--floating"], "nv = 402 is too large for Pinocchio's Data"),
+    (["analyze", "nope"], "robot 'nope': not chain:N"),
+    (["analyze"], "the following arguments are required: robot"),
+    ([], "the following arguments are required: command"),
+    (["frobnicate"], "argument command: invalid choice: 'frobnicate'"),
+    (["analyze", "chain:2", "--bogus"], "unrecognized arguments: --bogus"),
+    (["demo", "-o", "{tmp}/good.json"], "good.json/analysis.json: cannot be written"),
+]
+
+
+@pytest.mark.usefixtures("hang_guard")
+@pytest.mark.parametrize(
+    ("argv", "expect"), BAD_ARGUMENTS, ids=lambda v: " ".join(v) if isinstance(v, list) else ""
+)
+def test_bad_arguments(argv, expect, tmp_path, capsys, monkeypatch):
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    code, out, err = _run_in(tmp_path, argv, capsys, monkeypatch)
+    _assert_one_error_line(code, out, err, expect)
+
+
+#: Cases urdfdom would complain about on stderr (checked in a real subprocess).
+SUBPROCESS_CASES = [
+    "urdf/mass_nan.urdf",
+    "urdf/mass_not_a_number.urdf",
+    "urdf/axis_two_components.urdf",
+    "urdf/limit_missing_effort.urdf",
+    "urdf/joint_type_unknown.urdf",
+    "urdf/visual_box_size_two_numbers.urdf",
+    "urdf/billion_laughs.urdf",
+    "urdf/not_utf8.urdf",
+]
+
+
+def _python(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    return subprocess.run(
+        [sys.executable, *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=HANG_LIMIT_S,
+    )
+
+
+@pytest.mark.parametrize("key", SUBPROCESS_CASES)
+def test_no_stray_stderr_in_a_real_process(key, tmp_path):
+    done = _python("-m", "gimwatch", "analyze", str(BAD / key), cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1 and done.stderr.startswith("gimwatch: error: ")
+    assert MANIFEST[key]["expect"] in done.stderr and done.stdout == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_urdfdom_would_print_without_the_checks(tmp_path):
+    """The control of the test above: Pinocchio's parser alone writes to stderr."""
+    code = (
+        "import pinocchio, sys; "
+        f"pinocchio.buildModelFromXML(open({str(BAD / 'urdf/mass_nan.urdf')!r}).read())"
+    )
+    done = _python("-c", code, cwd=tmp_path)
+    assert "Error:" in done.stderr and "mass [nan] is not a float" in done.stderr
+
+
+def test_warning_cases_print_one_line_in_a_real_process(tmp_path):
+    key = "urdf/inertia_triangle_inequality.urdf"
+    done = _python("-m", "gimwatch", "analyze", str(BAD / key), "--json", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.count("\n") == 1 and done.stderr.startswith("gimwatch: warning: ")
+
+
+def test_library_warning_is_a_warning_not_an_error():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(URDFWarning):
+            load_robot(BAD / "urdf/inertia_triangle_inequality.urdf")
