@@ -57,7 +57,9 @@ def joint_vector(
         for name, value in values.items():
             if name not in names:
                 shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
-                raise SceneError(source, f"{key}.{name}", f"unknown joint; {robot.name} has {shown}")
+                raise SceneError(
+                    source, f"{key}.{name}", f"unknown joint; {robot.name} has {shown}"
+                )
             joint = model.joints[model.getJointId(name)]
             start, width = (joint.idx_q, joint.nq) if space == "q" else (joint.idx_v, joint.nv)
             if width != 1:
@@ -223,9 +225,7 @@ class Wrench(Effect):
         self.data = robot.new_data()
 
     def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: D102
-        J = pin.computeFrameJacobian(
-            self.robot.model, self.data, q, self.frame_id, self.reference
-        )
+        J = pin.computeFrameJacobian(self.robot.model, self.data, q, self.frame_id, self.reference)
         return J.T @ self.wrench
 
 

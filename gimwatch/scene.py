@@ -345,7 +345,9 @@ def _watch(reader: _Reader) -> WatchSpec:
     alarm_metric = reader.string("alarm_metric", scalar[0] if scalar and threshold else None)
     if alarm_metric is not None:
         if alarm_metric not in scalar:
-            raise reader.fail("alarm_metric", f"must be a watched scalar metric, got {alarm_metric!r}")
+            raise reader.fail(
+                "alarm_metric", f"must be a watched scalar metric, got {alarm_metric!r}"
+            )
         if threshold is None:
             raise reader.fail("alarm_threshold", "is required when alarm_metric is given")
     on_alarm = reader.string("on_alarm", "warn", choices=ON_ALARM_ACTIONS)
