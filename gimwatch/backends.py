@@ -55,7 +55,7 @@ class AbaBackend(Backend):
         self.model = model_with_gravity(robot, gravity)
         self.data = robot.new_data()
 
-    def forward_dynamics(self, q, v, tau):  # noqa: D102
+    def forward_dynamics(self, q, v, tau):
         return pin.aba(self.model, self.data, q, v, tau)
 
 
@@ -69,7 +69,7 @@ class CrbaCholeskyBackend(Backend):
         self.model = model_with_gravity(robot, gravity)
         self.data = robot.new_data()
 
-    def forward_dynamics(self, q, v, tau):  # noqa: D102
+    def forward_dynamics(self, q, v, tau):
         M = pin.crba(self.model, self.data, q)
         bias = pin.nonLinearEffects(self.model, self.data, q, v)
         factor = scipy.linalg.cho_factor(M, lower=False, check_finite=False)
@@ -90,7 +90,7 @@ class DenocBackend(Backend):
         )
         self._g = tuple(float(x) for x in self.gravity)
 
-    def forward_dynamics(self, q, v, tau):  # noqa: D102
+    def forward_dynamics(self, q, v, tau):
         return np.asarray(self.denoc.forward_dynamics(q, v, tau, gravity=self._g), dtype=float)
 
 

@@ -135,7 +135,7 @@ class Damping(Effect):
             robot, params["coefficient"], source=source, key="effects.damping.coefficient"
         )
 
-    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: D102
+    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return -self.c * v
 
 
@@ -157,10 +157,10 @@ class Spring(Effect):
         self.k = joint_vector(robot, params["stiffness"], source=source, key=key + "stiffness")
         self.rest = joint_vector(robot, params["rest"], source=source, key=key + "rest", space="q")
 
-    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: D102
+    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return -self.k * (q - self.rest)
 
-    def potential_energy(self, q: np.ndarray) -> float:  # noqa: D102
+    def potential_energy(self, q: np.ndarray) -> float:
         return float(0.5 * np.sum(self.k * (q - self.rest) ** 2))
 
 
@@ -190,7 +190,7 @@ class Torque(Effect):
         # Only the PD law reads v: declared velocity dependence, per instance.
         self.uses_velocity = self.law == "pd"
 
-    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: D102
+    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         if self.law == "constant":
             return self.value
         if self.law == "sinusoid":
@@ -224,7 +224,7 @@ class Wrench(Effect):
         )
         self.data = robot.new_data()
 
-    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # noqa: D102
+    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         J = pin.computeFrameJacobian(self.robot.model, self.data, q, self.frame_id, self.reference)
         return J.T @ self.wrench
 

@@ -178,7 +178,7 @@ class Simulation:
         return total
 
     def acceleration(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """a = FD(q, v, τ(t, q, v)) from the backend; counts one RHS evaluation."""
+        """A = FD(q, v, τ(t, q, v)) from the backend; counts one RHS evaluation."""
         self.rhs_evaluations += 1
         return self.backend.forward_dynamics(q, v, self.tau(t, q, v))
 

@@ -132,7 +132,7 @@ class Rcond(Metric):
     def __call__(self, state):
         return 1.0 / conditioning.condition_estimate_1norm(state.M)
 
-    def severity(self, value: float) -> float:  # noqa: D102
+    def severity(self, value: float) -> float:
         return 1.0 / value
 
 

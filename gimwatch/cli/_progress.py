@@ -7,7 +7,7 @@ import time
 
 
 class ProgressBar:
-    """Callable with the fraction done; draws after ``delay_s`` at most ``rate_hz`` times a second."""
+    """Called with the fraction done; draws after ``delay_s``, at most ``rate_hz`` per second."""
 
     def __init__(self, label: str, *, delay_s: float = 2.0, rate_hz: float = 5.0, stream=None):
         self.label, self.delay_s, self.period = label, delay_s, 1.0 / rate_hz
@@ -22,7 +22,7 @@ class ProgressBar:
             return
         self.last = now
         width = 30
-        filled = int(round(width * min(max(fraction, 0.0), 1.0)))
+        filled = round(width * min(max(fraction, 0.0), 1.0))
         bar = "#" * filled + "." * (width - filled)
         elapsed = now - self.start
         self.stream.write(f"\r{self.label} [{bar}] {100 * fraction:5.1f}% {elapsed:6.1f} s")
