@@ -308,11 +308,12 @@ class Simulation:
 
         start = time.perf_counter()
         try:
-            outcome = record(0.0, self.q0, self.v0) or (
-                self._fixed_steps(record, progress)
-                if scene.integrator.fixed_step
-                else self._scipy_steps(record, progress, sample_times)
-            )
+            with np.errstate(over="ignore", invalid="ignore"):  # divergence is checked per step
+                outcome = record(0.0, self.q0, self.v0) or (
+                    self._fixed_steps(record, progress)
+                    if scene.integrator.fixed_step
+                    else self._scipy_steps(record, progress, sample_times)
+                )
         except KeyboardInterrupt:
             outcome = ("interrupted", "interrupted by the user (Ctrl-C)")
         wall = time.perf_counter() - start
