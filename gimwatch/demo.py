@@ -55,7 +55,7 @@ def paper_chain_table(n: int, *, duration_s: float = 5.0, sample_s: float = 0.01
     }
 
 
-def _figures(runs: dict[int, Trajectory], output: Path) -> list[Path]:
+def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -127,7 +127,41 @@ def _figures(runs: dict[int, Trajectory], output: Path) -> list[Path]:
     ax.set(xlabel="time (s)", ylabel="(E − E₀) / max KE", title="Relative energy drift (DOP853)")
     ax.legend(fontsize="small")
     save(fig, "energy_drift.png")
+    if animate is not None and animate in runs:
+        paths.append(_animation(runs[animate], output / f"chain_{animate}_swing.gif"))
     return paths
+
+
+def _animation(run: Trajectory, path: Path, *, frame_s: float = 0.05) -> Path:
+    """A GIF of the swinging chain coloured by κ₂ (matplotlib's PillowWriter)."""
+    import matplotlib.pyplot as plt
+    import pinocchio as pin
+    from matplotlib.animation import PillowWriter
+
+    from gimwatch import plots
+    from gimwatch.robots import load_robot
+
+    robot = load_robot(f"chain:{run.q.shape[1]}")
+    model, data = robot.model, robot.new_data()
+    tip = pin.SE3(np.eye(3), np.array([robot.chain.lengths_m[-1], 0.0, 0.0]))
+    every = max(1, round(frame_s / run.scene.sample_s))
+    frames = range(0, run.t.size, every)
+    xy = []
+    for k in frames:  # kinematics for the picture only, once per frame
+        pin.forwardKinematics(model, data, run.q[k])
+        joints = [np.array(data.oMi[j].translation[:2]) for j in range(1, model.njoints)]
+        xy.append([*joints, (data.oMi[model.njoints - 1] * tip).translation[:2]])
+    animation = plots.animate_chain(
+        run.t[::every],
+        np.array(xy),
+        run.watch["watch_kappa"][::every],
+        title=f"{robot.name} swinging, coloured by κ₂",
+    )
+    tmp = path.with_name(f".{path.name}.tmp.gif")
+    animation.save(tmp, writer=PillowWriter(fps=round(1 / frame_s)))
+    plt.close(animation._fig)
+    tmp.replace(path)
+    return path
 
 
 def _fmt(x: Any, spec: str = ".4g") -> str:
@@ -210,6 +244,7 @@ def run_demo(
     *,
     lengths: tuple[int, ...] = PAPER_CHAIN_LENGTHS,
     duration_s: float = 5.0,
+    animate: int | None = 10,
     progress: Callable[[int], Callable[[float], None] | None] | None = None,
 ) -> Path:
     """Simulate the paper's chains, write figures, results and ``report.md``; return its path.
@@ -218,6 +253,7 @@ def run_demo(
         output: Folder to write into (created).
         lengths: Chain lengths to simulate.
         duration_s: Simulated time per chain.
+        animate: Chain length to animate as a GIF (None: no animation).
         progress: Given n, returns a progress callback for that chain's run (or None).
     """
     output = Path(output)
@@ -234,5 +270,5 @@ def run_demo(
             raise KeyboardInterrupt
         write_simulation(trajectory, output / f"chain_{n}", plots=False)
         runs[n], summaries[n] = trajectory, summarize(trajectory)
-    figures = _figures(runs, output)
+    figures = _figures(runs, output, animate)
     return write_text_atomic(output / "report.md", _report(runs, summaries, figures))

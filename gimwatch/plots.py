@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "animate_chain",
     "plot_diagonal",
     "plot_eigenvalues",
     "plot_energy",
@@ -119,3 +120,39 @@ def plot_joint_angles(t: npt.ArrayLike, q: npt.ArrayLike, *, names=None, ax=None
     if q.shape[1] <= 10:
         ax.legend(fontsize="small", ncols=2)
     return ax
+
+
+def animate_chain(
+    t: npt.ArrayLike, joint_xy: npt.ArrayLike, kappa: npt.ArrayLike, *, title: str = ""
+):
+    """A planar chain swinging, coloured by κ₂ on a log scale; returns a FuncAnimation.
+
+    Args:
+        t: Frame times (s), shape (K,).
+        joint_xy: Joint and tip positions in the plane of motion, shape (K, n + 1, 2).
+        kappa: κ₂ at each frame, shape (K,).
+        title: Figure title.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.animation import FuncAnimation
+    from matplotlib.colors import LogNorm
+
+    points = np.asarray(joint_xy)
+    kappa = np.asarray(kappa)
+    norm = LogNorm(vmin=kappa.min(), vmax=kappa.max())
+    cmap = plt.get_cmap("viridis")
+    fig, ax = plt.subplots(figsize=(5, 5), layout="constrained")
+    reach = np.abs(points).max() * 1.05
+    ax.set(xlim=(-reach, reach), ylim=(-reach, reach * 0.3), aspect="equal")
+    ax.set(xlabel="x (m)", ylabel="y (m)", title=title)
+    (line,) = ax.plot([], [], "o-", lw=3, ms=3)
+    label = ax.text(0.02, 0.95, "", transform=ax.transAxes)
+    fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="κ₂", shrink=0.6)
+
+    def draw(k):
+        line.set_data(points[k, :, 0], points[k, :, 1])
+        line.set_color(cmap(norm(kappa[k])))
+        label.set_text(f"t = {t[k]:.2f} s   κ₂ = {kappa[k]:.3g}")
+        return line, label
+
+    return FuncAnimation(fig, draw, frames=len(points), blit=True)

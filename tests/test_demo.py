@@ -16,7 +16,7 @@ def test_example_scene_files_are_the_demo_scenes(n):
 
 
 def test_short_demo_writes_figures_report_and_results(tmp_path):
-    report = run_demo(tmp_path, lengths=(3, 5), duration_s=0.5)
+    report = run_demo(tmp_path, lengths=(3, 5), duration_s=0.5, animate=5)
     text = report.read_text()
     for name in (
         "fig2_chain_3.png",
