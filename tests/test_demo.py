@@ -25,6 +25,7 @@ def test_short_demo_writes_figures_report_and_results(tmp_path):
         "fig5_kappa_scaled.png",
         "energy_drift.png",
         "chain_5/summary.json",
+        "chain_5_swing.gif",
     ):
         assert (tmp_path / name).exists(), name
         assert name.split("/")[0] in text
