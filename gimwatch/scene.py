@@ -136,7 +136,7 @@ class Scene:
     robot: RobotSpec
     duration_s: float
     sample_s: float
-    q: JointValues = 0.0
+    q: JointValues | None = None
     v: JointValues = 0.0
     effects: tuple[EffectSpec, ...] = ()
     integrator: IntegratorSpec = field(default_factory=IntegratorSpec)
@@ -390,7 +390,7 @@ def parse_scene(
         robot=robot,
         duration_s=duration,
         sample_s=sample,
-        q=reader.joint_values("q", 0.0),
+        q=reader.joint_values("q", None),
         v=reader.joint_values("v", 0.0),
         effects=_effects(reader.sub("effects")),
         integrator=integrator,
@@ -409,6 +409,8 @@ def load_scene(path: str | Path) -> Scene:
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
+    except FileNotFoundError as exc:
+        raise SceneError(str(path), "", "no such file") from exc
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(str(path), "", f"cannot be read ({exc.__class__.__name__})") from exc
     try:

@@ -145,7 +145,11 @@ class Simulation:
         self._zero_tau = np.zeros(robot.nv)
         self._zero_tau.setflags(write=False)
         q0 = neutral_configuration(robot)
-        self.q0 = joint_vector(robot, scene.q, source=scene.source, key="q", space="q", default=q0)
+        self.q0 = (
+            q0
+            if scene.q is None
+            else joint_vector(robot, scene.q, source=scene.source, key="q", space="q", default=q0)
+        )
         self.v0 = joint_vector(robot, scene.v, source=scene.source, key="v")
         self.euclidean = robot.nq == robot.nv
         if not self.euclidean and not scene.integrator.fixed_step:
