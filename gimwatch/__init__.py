@@ -38,6 +38,10 @@ from gimwatch.robots import (
     neutral_configuration,
     random_configurations,
 )
+from gimwatch.scene import Scene, load_scene, parse_scene
+from gimwatch.simresults import summarize, write_simulation
+from gimwatch.simulate import Simulation, Trajectory, run_scene
+from gimwatch.watch import Watch, estimator_quality
 
 __all__ = [
     "ChainSpec",
@@ -51,9 +55,13 @@ __all__ = [
     "Robot",
     "RobotError",
     "ScaledDiagonalRatio",
+    "Scene",
     "SceneError",
+    "Simulation",
     "SimulationError",
+    "Trajectory",
     "URDFError",
+    "Watch",
     "__version__",
     "analyze_configuration",
     "chain_spec",
@@ -63,16 +71,22 @@ __all__ = [
     "crosscheck_robot",
     "diagonal_ratio",
     "eigenvalues",
+    "estimator_quality",
     "example_robot_names",
     "generate_chain_urdf",
     "gim",
     "gim_diagonal",
     "ldlt_pivots",
     "load_robot",
+    "load_scene",
     "neutral_configuration",
+    "parse_scene",
     "pivot_ratio_backward",
     "pivot_ratio_forward",
     "random_configurations",
+    "run_scene",
+    "summarize",
     "udut_pivots",
     "write_chain_urdf",
+    "write_simulation",
 ]

@@ -1,35 +1,273 @@
-"""The main job: conditioning of the paper's straight 4-, 10- and 20-link chains."""
+"""The main job: the paper's swinging 4-, 10- and 20-link chains, watched, in figures.
+
+Shah & Saha (2013), Sec. 4: chains of identical slender rods (2.2 kg, 1 m), joints about
+z, released straight and horizontal at rest under gravity in the plane of motion. Each
+chain is simulated with DOP853 (rtol = atol = 1e-10) while the watch records κ₂, δ, αδ
+(α from t = 0 only, Eq. 15), both pivot ratios, the spectrum and diag M at every sample.
+:func:`run_demo` writes one results folder per chain, the figures in the spirit of the
+paper's Figs. 2–5 and ``report.md`` with the numbers.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
-from gimwatch.analysis import analyze_configuration
-from gimwatch.results import write_json_atomic, write_text_atomic
-from gimwatch.robots import load_robot, neutral_configuration
+import numpy as np
 
-__all__ = ["PAPER_CHAIN_LENGTHS", "run_demo"]
+from gimwatch.results import prepare_directory, write_text_atomic
+from gimwatch.scene import Scene, parse_scene
+from gimwatch.simresults import summarize, versions, write_simulation
+from gimwatch.simulate import Simulation, Trajectory
+
+__all__ = ["PAPER_CHAIN_LENGTHS", "paper_chain_table", "run_demo"]
 
 PAPER_CHAIN_LENGTHS = (4, 10, 20)
+DEMO_METRICS = (
+    "kappa",
+    "diagonal_ratio",
+    "scaled_diagonal_ratio",
+    "pivot_ratio_forward",
+    "pivot_ratio_backward",
+    "eigenvalues",
+    "diagonal",
+)
 
 
-def run_demo(output: Path) -> Path:
-    """Analyse the paper's chains at the straight configuration; return the report path."""
-    results = []
-    for n in PAPER_CHAIN_LENGTHS:
-        robot = load_robot(f"chain:{n}")
-        results.append(analyze_configuration(robot, neutral_configuration(robot)))
-    lines = [
-        "# gimwatch demo: the paper's chains, straight",
-        "",
-        "| n | kappa | 4 n^4 | kappa / 4n^4 | delta | n^3 | pivot fwd | pivot bwd |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for n, r in zip(PAPER_CHAIN_LENGTHS, results, strict=True):
-        lines.append(
-            f"| {n} | {r.kappa:.6g} | {4 * n**4} | {r.kappa / (4 * n**4):.4f} | "
-            f"{r.diagonal_ratio:.6g} | {n**3} | {r.pivot_ratio_forward:.4g} | "
-            f"{r.pivot_ratio_backward:.4g} |"
+def paper_chain_table(n: int, *, duration_s: float = 5.0, sample_s: float = 0.01) -> dict:
+    """The scene table of the paper's swinging n-link chain (``scenes/chain_N.toml``)."""
+    return {
+        "robot": f"chain:{n}",
+        "duration": duration_s,
+        "sample": sample_s,
+        "q": 0.0,
+        "v": 0.0,
+        "effects": {"gravity": {"vector": [0.0, -9.81, 0.0]}},
+        "integrator": {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10},
+        "dynamics": {"backend": "aba"},
+        "watch": {
+            "metrics": list(DEMO_METRICS),
+            "alarm_metric": "scaled_diagonal_ratio",
+            "alarm_threshold": 1e7,
+            "on_alarm": "warn",
+        },
+    }
+
+
+def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    from gimwatch import plots
+
+    paths = []
+
+    def save(fig, name):
+        path = output / name
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+
+    def series(n, name):
+        return runs[n].watch["watch_t"], runs[n].watch[f"watch_{name}"]
+
+    first = min(runs)
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), layout="constrained")
+    t, eig = series(first, "eigenvalues")
+    plots.plot_eigenvalues(t, eig, ax=axes[0, 0])
+    plots.plot_diagonal(t, series(first, "diagonal")[1], ax=axes[0, 1])
+    axes[1, 0].semilogy(t, series(first, "kappa")[1])
+    axes[1, 0].set(xlabel="time (s)", ylabel="κ₂ = λmax/λmin", title="Condition number")
+    axes[1, 1].semilogy(t, series(first, "diagonal_ratio")[1])
+    axes[1, 1].set(xlabel="time (s)", ylabel="δ = max Mii / min Mii", title="Diagonal ratio")
+    fig.suptitle(f"Fig. 2 — GIM of the swinging {first}-link chain")
+    save(fig, f"fig2_chain_{first}.png")
+
+    longer = [n for n in runs if n != first] or [first]
+    fig, axes = plt.subplots(1, len(longer), figsize=(5.5 * len(longer), 4), layout="constrained")
+    for ax, n in zip(np.atleast_1d(axes), longer, strict=True):
+        t, kappa = series(n, "kappa")
+        plots.plot_kappa_and_delta(t, kappa, series(n, "diagonal_ratio")[1], label=f"n={n}", ax=ax)
+        ax.axhline(4 * n**4, color="grey", lw=0.8, ls=":", label="4n⁴")
+        ax.legend(fontsize="small")
+    fig.suptitle("Fig. 3 — condition number and diagonal ratio")
+    save(fig, "fig3_kappa_delta.png")
+
+    fig, axes = plt.subplots(1, len(longer), figsize=(5.5 * len(longer), 4), layout="constrained")
+    for ax, n in zip(np.atleast_1d(axes), longer, strict=True):
+        t, forward = series(n, "pivot_ratio_forward")
+        plots.plot_pivot_ratios(
+            t,
+            forward,
+            series(n, "pivot_ratio_backward")[1],
+            series(n, "kappa")[1],
+            label=f"n={n}",
+            ax=ax,
         )
-    write_json_atomic(output / "analysis.json", [r.to_dict() for r in results])
-    return write_text_atomic(output / "report.md", "\n".join(lines) + "\n")
+    fig.suptitle("Fig. 4 — pivot ratios of Gaussian elimination")
+    save(fig, "fig4_pivot_ratios.png")
+
+    fig, axes = plt.subplots(1, len(runs), figsize=(5 * len(runs), 4), layout="constrained")
+    for ax, n in zip(np.atleast_1d(axes), sorted(runs), strict=True):
+        t, kappa = series(n, "kappa")
+        plots.plot_kappa_and_scaled(
+            t, kappa, series(n, "scaled_diagonal_ratio")[1], label=f"n={n}", ax=ax
+        )
+    fig.suptitle("Fig. 5 — condition number and scaled diagonal ratio αδ (α from t = 0)")
+    save(fig, "fig5_kappa_scaled.png")
+
+    fig, ax = plt.subplots(figsize=(6.4, 4), layout="constrained")
+    for n in sorted(runs):
+        energy = runs[n].energy
+        scale = max(abs(energy[0]), runs[n].kinetic_peak)
+        ax.plot(runs[n].t, (energy - energy[0]) / scale, label=f"n={n}")
+    ax.set(xlabel="time (s)", ylabel="(E − E₀) / max KE", title="Relative energy drift (DOP853)")
+    ax.legend(fontsize="small")
+    save(fig, "energy_drift.png")
+    if animate is not None and animate in runs:
+        paths.append(_animation(runs[animate], output / f"chain_{animate}_swing.gif"))
+    return paths
+
+
+def _animation(run: Trajectory, path: Path, *, frame_s: float = 0.05) -> Path:
+    """A GIF of the swinging chain coloured by κ₂ (matplotlib's PillowWriter)."""
+    import matplotlib.pyplot as plt
+    import pinocchio as pin
+    from matplotlib.animation import PillowWriter
+
+    from gimwatch import plots
+    from gimwatch.robots import load_robot
+
+    robot = load_robot(f"chain:{run.q.shape[1]}")
+    model, data = robot.model, robot.new_data()
+    tip = pin.SE3(np.eye(3), np.array([robot.chain.lengths_m[-1], 0.0, 0.0]))
+    every = max(1, round(frame_s / run.scene.sample_s))
+    frames = range(0, run.t.size, every)
+    xy = []
+    for k in frames:  # kinematics for the picture only, once per frame
+        pin.forwardKinematics(model, data, run.q[k])
+        joints = [np.array(data.oMi[j].translation[:2]) for j in range(1, model.njoints)]
+        xy.append([*joints, (data.oMi[model.njoints - 1] * tip).translation[:2]])
+    animation = plots.animate_chain(
+        run.t[::every],
+        np.array(xy),
+        run.watch["watch_kappa"][::every],
+        title=f"{robot.name} swinging, coloured by κ₂",
+    )
+    tmp = path.with_name(f".{path.name}.tmp.gif")
+    animation.save(tmp, writer=PillowWriter(fps=round(1 / frame_s)))
+    plt.close(animation._fig)
+    tmp.replace(path)
+    return path
+
+
+def _fmt(x: Any, spec: str = ".4g") -> str:
+    return "—" if x is None else format(x, spec)
+
+
+def _report(runs: dict[int, Trajectory], summaries: dict[int, dict], figures: list[Path]) -> str:
+    info = versions()
+    lines = [
+        "# gimwatch demo — the paper's swinging chains (Shah & Saha 2013, Sec. 4)",
+        "",
+        f"gimwatch {info['gimwatch']}, Pinocchio {info['pinocchio']}, NumPy {info['numpy']}, "
+        f"SciPy {info['scipy']}, Python {info['python']}.",
+        "",
+        "Chains of identical slender rods (2.2 kg, 1 m), joints about z, released straight and "
+        "horizontal at rest under gravity (0, −9.81, 0) m/s². DOP853, rtol = atol = 1e-10, "
+        "ABA; the watch samples every 0.01 s. α = κ(t0)/δ(t0) is fixed at t = 0 (Eq. 15) "
+        "and never tuned.",
+        "",
+        "## Simulation",
+        "",
+        "| n | time (s) | steps | RHS evals | wall (s) | rel. energy drift |",
+        "|---|---|---|---|---|---|",
+    ]
+    for n, run in sorted(runs.items()):
+        s = summaries[n]
+        lines.append(
+            f"| {n} | {s['simulated_time_s']:.3g} | {run.steps} | {run.rhs_evaluations} | "
+            f"{run.wall_time_s:.2f} | {_fmt(s['energy_drift_relative'], '.2e')} |"
+        )
+    lines += [
+        "",
+        "## Conditioning along the trajectories",
+        "",
+        "| n | κ(t0) | max κ | 4n⁴ | max κ / 4n⁴ | max δ | n³ | max pivot fwd | max pivot bwd |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for n in sorted(runs):
+        w = runs[n].watch
+        kappa = w["watch_kappa"]
+        lines.append(
+            f"| {n} | {kappa[0]:.6g} | {kappa.max():.6g} | {4 * n**4} | "
+            f"{kappa.max() / (4 * n**4):.4f} | {w['watch_diagonal_ratio'].max():.6g} | {n**3} | "
+            f"{w['watch_pivot_ratio_forward'].max():.4g} | "
+            f"{w['watch_pivot_ratio_backward'].max():.4g} |"
+        )
+    lines += [
+        "",
+        "## How well the diagonal ratio estimates κ (α from t0 only)",
+        "",
+        "| n | α | Pearson(log δ, log κ) | Spearman(δ, κ) | median \\|αδ−κ\\|/κ "
+        "| max \\|αδ−κ\\|/κ |",
+        "|---|---|---|---|---|---|",
+    ]
+    for n in sorted(runs):
+        q = summaries[n]["estimator_quality"]
+        lines.append(
+            f"| {n} | {q['alpha']:.4g} | {q['pearson_log']:.3f} | {q['spearman']:.3f} | "
+            f"{q['median_relative_error']:.3f} | {q['max_relative_error']:.3f} |"
+        )
+    worst = max(summaries[n]["estimator_quality"]["max_relative_error"] for n in runs)
+    lines += [
+        "",
+        "Reading: κ is largest at the straight start (≈ 4n⁴) and δ = n³ there; as the chain "
+        "folds, κ and δ fall together. The correlation columns say how closely δ tracks κ's "
+        f"trend; the error columns say how far αδ is from κ in magnitude (worst {worst:.0%}). "
+        "The pivot ratios are listed for comparison with the paper's Fig. 4.",
+        "",
+        "## Figures",
+        "",
+    ]
+    lines += [f"- [{p.name}]({p.name})" for p in figures]
+    lines += ["", "Per-chain results (trajectory, watch series, summary.json): "]
+    lines += [f"- [chain_{n}/](chain_{n}/summary.json)" for n in sorted(runs)]
+    return "\n".join(lines) + "\n"
+
+
+def run_demo(
+    output: Path,
+    *,
+    lengths: tuple[int, ...] = PAPER_CHAIN_LENGTHS,
+    duration_s: float = 5.0,
+    animate: int | None = 10,
+    progress: Callable[[int], Callable[[float], None] | None] | None = None,
+) -> Path:
+    """Simulate the paper's chains, write figures, results and ``report.md``; return its path.
+
+    Args:
+        output: Folder to write into (created).
+        lengths: Chain lengths to simulate.
+        duration_s: Simulated time per chain.
+        animate: Chain length to animate as a GIF (None: no animation).
+        progress: Given n, returns a progress callback for that chain's run (or None).
+    """
+    output = prepare_directory(output)
+    runs: dict[int, Trajectory] = {}
+    summaries: dict[int, dict] = {}
+    for n in lengths:
+        scene: Scene = parse_scene(
+            paper_chain_table(n, duration_s=duration_s), source=f"<demo chain_{n}>"
+        )
+        trajectory = Simulation(scene).run(progress=progress(n) if progress else None)
+        trajectory.raise_for_status()
+        if trajectory.status != "completed":
+            raise KeyboardInterrupt
+        write_simulation(trajectory, output / f"chain_{n}", plots=False)
+        runs[n], summaries[n] = trajectory, summarize(trajectory)
+    figures = _figures(runs, output, animate)
+    return write_text_atomic(output / "report.md", _report(runs, summaries, figures))

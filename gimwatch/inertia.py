@@ -43,10 +43,8 @@ def gim_diagonal(robot: Robot, q: npt.ArrayLike, *, data: pin.Data | None = None
     q = as_configuration(robot, q)
     data = robot.new_data() if data is None else data
     # reshape: eigenpy hands back a 6 x 1 matrix as a vector when nv = 1
-    centroidal_map = np.reshape(pin.computeCentroidalMap(robot.model, data, q), (6, -1))
-    motion = np.reshape(data.J, (6, -1))
-    force = centroidal_map[:3]
-    torque_at_origin = centroidal_map[3:] + np.cross(data.com[0], force, axis=0)
-    return np.einsum("ij,ij->j", motion[:3], force) + np.einsum(
-        "ij,ij->j", motion[3:], torque_at_origin
-    )
+    force = np.reshape(pin.computeCentroidalMap(robot.model, data, q), (6, -1)).copy()
+    cx, cy, cz = data.com[0]
+    skew = np.array([[0.0, -cz, cy], [cz, 0.0, -cx], [-cy, cx, 0.0]])
+    force[3:] += skew @ force[:3]  # torque about the origin: n_O = n_G + c x f
+    return np.einsum("ij,ij->j", np.reshape(data.J, (6, -1)), force)

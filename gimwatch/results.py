@@ -18,12 +18,22 @@ import numpy as np
 from gimwatch.errors import OutputError
 
 __all__ = [
+    "prepare_directory",
     "to_json",
     "write_bytes_atomic",
     "write_json_atomic",
     "write_npz_atomic",
     "write_text_atomic",
 ]
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+_FILE_MODE = 0o666 & ~_umask()
 
 
 def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
@@ -44,12 +54,25 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
     try:
         with os.fdopen(fd, "wb") as handle:
             handle.write(data)
+        os.chmod(tmp, _FILE_MODE)  # mkstemp makes 0600 files; results are meant to be shared
         os.replace(tmp, path)
     except BaseException as exc:
         Path(tmp).unlink(missing_ok=True)
         if isinstance(exc, OSError):
             raise OutputError(str(path), f"cannot be written ({exc.strerror or exc})") from exc
         raise
+    return path
+
+
+def prepare_directory(path: str | Path) -> Path:
+    """Create the folder ``path`` (and its parents) or raise :class:`OutputError`."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputError(str(path), "is a file, not a folder; give a folder name")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(str(path), f"cannot be created ({exc.strerror or exc})") from exc
     return path
 
 

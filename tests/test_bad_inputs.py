@@ -272,7 +272,7 @@ BAD_ARGUMENTS = [
     ([], "the following arguments are required: command"),
     (["frobnicate"], "argument command: invalid choice: 'frobnicate'"),
     (["analyze", "chain:2", "--bogus"], "unrecognized arguments: --bogus"),
-    (["demo", "-o", "{tmp}/good.json"], "good.json/analysis.json: cannot be written"),
+    (["demo", "-o", "{tmp}/good.json"], "good.json: is a file, not a folder"),
 ]
 
 

@@ -1,1 +1,1 @@
-"""Benchmarks: what accuracy and independence cost in time (never run by the tests' timers)."""
+"""Benchmarks: what accuracy and watching cost in time (measured here, never in tests)."""

@@ -31,9 +31,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _commands() -> dict[str, ModuleType]:
-    from gimwatch.cli import analyze, chain, crosscheck, demo
+    from gimwatch.cli import analyze, chain, crosscheck, demo, simulate
 
-    return {module.NAME: module for module in (chain, analyze, crosscheck, demo)}
+    return {module.NAME: module for module in (chain, analyze, crosscheck, simulate, demo)}
 
 
 def get_argument_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,71 @@
+"""Simulate a scene file with the GIM watch alongside and write a results folder."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from gimwatch.cli._progress import ProgressBar
+from gimwatch.scene import load_scene
+from gimwatch.simresults import summarize, write_simulation
+from gimwatch.simulate import Simulation
+
+NAME = "simulate"
+HELP = "simulate a scene (TOML) and watch the conditioning of M(q)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declare the subcommand's arguments."""
+    parser.add_argument("scene", help="scene file (TOML); see the README for the schema")
+    parser.add_argument(
+        "-o", "--output", help="results folder (default: results/<scene name> next to the cwd)"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Validate, simulate, write; report the status on stderr and a summary on stdout."""
+    scene = load_scene(args.scene)
+    simulation = Simulation(scene)  # every error that needs the robot is raised here
+    output = Path(args.output) if args.output else Path("results") / Path(args.scene).stem
+    bar = ProgressBar(f"{simulation.robot.name}")
+    try:
+        trajectory = simulation.run(progress=bar)
+    finally:
+        bar.close()
+    folder = write_simulation(trajectory, output)
+    summary = summarize(trajectory)
+    for alarm in trajectory.alarms:
+        print(
+            f"gimwatch: warning: {alarm.metric} = {alarm.value:.4g} > {alarm.threshold:.4g} "
+            f"at t = {alarm.time_s:.4g} s",
+            file=sys.stderr,
+        )
+    lines = [
+        f"{trajectory.robot}: {trajectory.status}, t = {summary['simulated_time_s']:.4g} s, "
+        f"{trajectory.steps} steps, {trajectory.rhs_evaluations} RHS evaluations, "
+        f"{trajectory.wall_time_s:.3g} s wall",
+    ]
+    if summary["energy_drift_relative"] is not None:
+        lines.append(f"relative energy drift: {summary['energy_drift_relative']:.3g}")
+    for name, value in summary["watch_maxima"].items():
+        lines.append(f"max {name}: {value:.6g}")
+    quality = summary["estimator_quality"]
+    if isinstance(quality, dict):
+        lines.append(
+            f"estimator: alpha = {quality['alpha']:.4g}, Pearson(log) = "
+            f"{quality['pearson_log']:.3f}, Spearman = {quality['spearman']:.3f}, median rel. "
+            f"error = {quality['median_relative_error']:.3g}, max = "
+            f"{quality['max_relative_error']:.3g}"
+        )
+    print("\n".join(lines))
+    print(f"wrote {folder}", file=sys.stderr)
+    if trajectory.status == "interrupted":
+        print("gimwatch: interrupted; results so far were written", file=sys.stderr)
+        return 130
+    if trajectory.status in ("diverged", "failed"):
+        print(
+            f"gimwatch: error: {trajectory.message}; results so far were written", file=sys.stderr
+        )
+        return 1
+    return 0

@@ -1,0 +1,420 @@
+"""Scene files: what is in the world, how to integrate it and what to watch.
+
+A scene is a TOML file read with :mod:`tomllib` and validated once, into frozen
+dataclasses. Unknown keys, wrong types, wrong lengths, negative durations, unknown effect,
+metric, joint or link names are :class:`~gimwatch.errors.SceneError` naming the file and
+the key (``scene.toml: effects.spring.stiffness: ...``). The schema is documented in the
+README ("Scenes"); :data:`EFFECT_KEYS` and :data:`METRIC_NAMES` are the registries' names.
+
+Joint-indexed values (``q``, ``v``, damping, stiffness, torques, targets) are given as a
+number (broadcast to every coordinate), a list (one per coordinate) or a table keyed by
+joint name (coordinates not named keep the default). They are resolved against the robot
+by :func:`joint_vector` when the simulation is built, because the names are the robot's.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from gimwatch.errors import SceneError
+
+__all__ = [
+    "BACKENDS",
+    "EFFECT_KEYS",
+    "FIXED_STEP_METHODS",
+    "METRIC_NAMES",
+    "ON_ALARM_ACTIONS",
+    "SCIPY_METHODS",
+    "EffectSpec",
+    "IntegratorSpec",
+    "RobotSpec",
+    "Scene",
+    "WatchSpec",
+    "load_scene",
+    "parse_scene",
+]
+
+SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
+FIXED_STEP_METHODS = ("RK4", "semi-implicit-euler")
+BACKENDS = ("aba", "crba-cholesky", "denoc")
+METRIC_NAMES = (
+    "kappa",
+    "diagonal_ratio",
+    "scaled_diagonal_ratio",
+    "pivot_ratio_forward",
+    "pivot_ratio_backward",
+    "rcond",
+    "eigenvalues",
+    "diagonal",
+)
+#: What to do when the alarm metric crosses its threshold; issue 6 adds "tighten" and
+#: "switch-backend".
+ON_ALARM_ACTIONS = ("warn", "stop")
+TORQUE_LAWS = ("constant", "sinusoid", "pd")
+
+#: Each effect's keys: name -> (required keys, optional keys).
+EFFECT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "gravity": (("vector",), ()),
+    "damping": (("coefficient",), ()),
+    "spring": (("stiffness",), ("rest",)),
+    "torque": (("law",), ("value", "amplitude", "frequency_hz", "phase_rad", "kp", "kd", "target")),
+    "wrench": (("link",), ("force", "torque", "frame")),
+}
+_TORQUE_LAW_KEYS = {
+    "constant": ({"value"}, set()),
+    "sinusoid": ({"amplitude", "frequency_hz"}, {"phase_rad", "value"}),
+    "pd": ({"kp", "kd", "target"}, set()),
+}
+_TOP_KEYS = {
+    "robot",
+    "base",
+    "q",
+    "v",
+    "duration",
+    "sample",
+    "effects",
+    "integrator",
+    "dynamics",
+    "watch",
+}
+
+JointValues = float | tuple[float, ...] | dict[str, float]
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """Which robot: a ``chain:N`` / example-robot-data / URDF path string, or a chain table."""
+
+    spec: str
+    floating: bool = False
+    chain: dict[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class EffectSpec:
+    """One declared effect: its registry name and its validated parameters."""
+
+    name: str
+    params: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class IntegratorSpec:
+    """The integrator: a scipy ``solve_ivp`` method (rtol, atol) or a fixed step (dt, s)."""
+
+    method: str = "DOP853"
+    rtol: float = 1e-8
+    atol: float = 1e-8
+    dt: float | None = None
+    max_step: float = math.inf
+
+    @property
+    def fixed_step(self) -> bool:
+        """Whether the method takes fixed steps of ``dt``."""
+        return self.method in FIXED_STEP_METHODS
+
+
+@dataclass(frozen=True)
+class WatchSpec:
+    """Metrics to compute at each sample, and the alarm on one of them."""
+
+    metrics: tuple[str, ...] = ()
+    alarm_metric: str | None = None
+    alarm_threshold: float | None = None
+    on_alarm: str = "warn"
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene. Times in seconds; joint values in the robot's SI units."""
+
+    source: str
+    robot: RobotSpec
+    duration_s: float
+    sample_s: float
+    q: JointValues | None = None
+    v: JointValues = 0.0
+    effects: tuple[EffectSpec, ...] = ()
+    integrator: IntegratorSpec = field(default_factory=IntegratorSpec)
+    backend: str = "aba"
+    watch: WatchSpec = field(default_factory=WatchSpec)
+    raw: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def effect_names(self) -> tuple[str, ...]:
+        """Names of the declared effects, in file order."""
+        return tuple(effect.name for effect in self.effects)
+
+    def error(self, key: str, problem: str) -> SceneError:
+        """A :class:`SceneError` about ``key`` in this scene's file."""
+        return SceneError(self.source, key, problem)
+
+
+class _Reader:
+    """Typed access to a TOML table that reports errors as ``source: key: problem``."""
+
+    def __init__(self, source: str, table: dict, prefix: str = "") -> None:
+        self.source, self.table, self.prefix = source, table, prefix
+
+    def key(self, name: str) -> str:
+        return f"{self.prefix}{name}"
+
+    def fail(self, name: str, problem: str) -> SceneError:
+        return SceneError(self.source, self.key(name), problem)
+
+    def check_keys(self, allowed: set[str] | tuple[str, ...], required: tuple[str, ...] = ()):
+        for name in self.table:
+            if name not in allowed:
+                raise self.fail(name, f"unknown key; expected one of {', '.join(sorted(allowed))}")
+        for name in required:
+            if name not in self.table:
+                raise self.fail(name, "is required")
+
+    def number(self, name: str, default=None, *, positive=False, nonnegative=False) -> float:
+        if name not in self.table:
+            return default
+        value = self.table[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.fail(name, f"must be a number, got {value!r}")
+        value = float(value)
+        if not math.isfinite(value):
+            raise self.fail(name, f"must be finite, got {value!r}")
+        if positive and value <= 0:
+            raise self.fail(name, f"must be > 0, got {value!r}")
+        if nonnegative and value < 0:
+            raise self.fail(name, f"must be >= 0, got {value!r}")
+        return value
+
+    def string(self, name: str, default=None, *, choices: tuple[str, ...] = ()) -> str:
+        if name not in self.table:
+            return default
+        value = self.table[name]
+        if not isinstance(value, str):
+            raise self.fail(name, f"must be a string, got {value!r}")
+        if choices and value not in choices:
+            raise self.fail(name, f"must be one of {', '.join(choices)}, got {value!r}")
+        return value
+
+    def vector3(self, name: str, default=None) -> tuple[float, float, float]:
+        if name not in self.table:
+            return default
+        value = self.table[name]
+        if (
+            not isinstance(value, list)
+            or len(value) != 3
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
+        ):
+            raise self.fail(name, f"must be a list of 3 numbers, got {value!r}")
+        if not all(math.isfinite(x) for x in value):
+            raise self.fail(name, f"must be finite, got {value!r}")
+        return tuple(float(x) for x in value)
+
+    def joint_values(self, name: str, default=None, *, nonnegative=False) -> JointValues:
+        if name not in self.table:
+            return default
+        value = self.table[name]
+        items: list[tuple[str, Any]]
+        if isinstance(value, dict):
+            items = [(f"{name}.{k}", v) for k, v in value.items()]
+        elif isinstance(value, list):
+            items = [(f"{name}[{i}]", v) for i, v in enumerate(value)]
+            if not items:
+                raise self.fail(name, "must not be an empty list")
+        else:
+            items = [(name, value)]
+        for key, x in items:
+            if isinstance(x, bool) or not isinstance(x, (int, float)):
+                raise self.fail(key, f"must be a number, got {x!r}")
+            if not math.isfinite(x) or (nonnegative and x < 0):
+                rule = "finite and >= 0" if nonnegative else "finite"
+                raise self.fail(key, f"must be {rule}, got {x!r}")
+        if isinstance(value, dict):
+            return {k: float(v) for k, v in value.items()}
+        if isinstance(value, list):
+            return tuple(float(x) for x in value)
+        return float(value)
+
+    def sub(self, name: str, default: dict | None = None) -> _Reader:
+        value = self.table.get(name, default if default is not None else {})
+        if not isinstance(value, dict):
+            raise self.fail(name, f"must be a table, got {value!r}")
+        return _Reader(self.source, value, f"{self.prefix}{name}.")
+
+
+def _robot(reader: _Reader, base_dir: Path | None) -> RobotSpec:
+    floating = reader.string("base", "fixed", choices=("fixed", "floating")) == "floating"
+    if "robot" not in reader.table:
+        raise reader.fail("robot", "is required")
+    value = reader.table["robot"]
+    if isinstance(value, dict):
+        chain = reader.sub("robot")
+        chain.check_keys(
+            {"n", "mass_kg", "length_m", "radius_m", "axes", "joint_types"}, required=("n",)
+        )
+        n = chain.table["n"]
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise chain.fail("n", f"must be a positive integer, got {n!r}")
+        return RobotSpec(spec=f"chain:{n}", floating=floating, chain=dict(value))
+    if not isinstance(value, str) or not value:
+        raise reader.fail("robot", f"must be a string or a chain table, got {value!r}")
+    if value.lower().endswith((".urdf", ".xml")) and base_dir is not None:
+        path = Path(value)
+        value = str(path if path.is_absolute() else base_dir / path)
+    return RobotSpec(spec=value, floating=floating)
+
+
+def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
+    effects = []
+    for name in reader.table:
+        if name not in EFFECT_KEYS:
+            raise reader.fail(name, f"unknown effect; expected one of {', '.join(EFFECT_KEYS)}")
+        table = reader.sub(name)
+        required, optional = EFFECT_KEYS[name]
+        table.check_keys(set(required) | set(optional), required)
+        params: dict[str, Any] = {}
+        if name == "gravity":
+            params["vector"] = table.vector3("vector")
+        elif name == "damping":
+            params["coefficient"] = table.joint_values("coefficient", nonnegative=True)
+        elif name == "spring":
+            params["stiffness"] = table.joint_values("stiffness", nonnegative=True)
+            params["rest"] = table.joint_values("rest", 0.0)
+        elif name == "torque":
+            law = table.string("law", choices=TORQUE_LAWS)
+            must, may = _TORQUE_LAW_KEYS[law]
+            present = set(table.table) - {"law"}
+            for key in sorted(present - must - may):
+                raise table.fail(key, f"is not a parameter of the {law!r} torque law")
+            for key in sorted(must - present):
+                raise table.fail(key, f"is required by the {law!r} torque law")
+            params["law"] = law
+            for key in present:
+                if key == "frequency_hz":
+                    params[key] = table.number(key, positive=True)
+                elif key == "phase_rad":
+                    params[key] = table.number(key)
+                else:
+                    params[key] = table.joint_values(key, nonnegative=key in ("kp", "kd"))
+        elif name == "wrench":
+            params["link"] = table.string("link")
+            params["force"] = table.vector3("force", (0.0, 0.0, 0.0))
+            params["torque"] = table.vector3("torque", (0.0, 0.0, 0.0))
+            params["frame"] = table.string("frame", "world", choices=("world", "local"))
+        effects.append(EffectSpec(name=name, params=params))
+    return tuple(effects)
+
+
+def _integrator(reader: _Reader) -> IntegratorSpec:
+    reader.check_keys({"method", "rtol", "atol", "dt", "max_step"})
+    method = reader.string("method", "DOP853", choices=SCIPY_METHODS + FIXED_STEP_METHODS)
+    if method in FIXED_STEP_METHODS:
+        if "dt" not in reader.table:
+            raise reader.fail("dt", f"is required by the fixed-step method {method}")
+        for key in ("rtol", "atol", "max_step"):
+            if key in reader.table:
+                raise reader.fail(key, f"does not apply to the fixed-step method {method}")
+        return IntegratorSpec(method=method, dt=reader.number("dt", positive=True))
+    if "dt" in reader.table:
+        raise reader.fail("dt", f"applies to fixed-step methods only, not {method}")
+    return IntegratorSpec(
+        method=method,
+        rtol=reader.number("rtol", 1e-8, positive=True),
+        atol=reader.number("atol", 1e-8, positive=True),
+        max_step=reader.number("max_step", math.inf, positive=True),
+    )
+
+
+def _watch(reader: _Reader) -> WatchSpec:
+    reader.check_keys({"metrics", "alarm_metric", "alarm_threshold", "on_alarm"})
+    metrics = reader.table.get("metrics", [])
+    if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
+        raise reader.fail("metrics", f"must be a list of metric names, got {metrics!r}")
+    for metric in metrics:
+        if metric not in METRIC_NAMES:
+            raise reader.fail(
+                "metrics", f"unknown metric {metric!r}; expected one of {', '.join(METRIC_NAMES)}"
+            )
+    if len(set(metrics)) != len(metrics):
+        raise reader.fail("metrics", f"lists a metric twice: {metrics!r}")
+    threshold = reader.number("alarm_threshold", positive=True)
+    scalar = [m for m in metrics if m not in ("eigenvalues", "diagonal")]
+    alarm_metric = reader.string("alarm_metric", scalar[0] if scalar and threshold else None)
+    if alarm_metric is not None:
+        if alarm_metric not in scalar:
+            raise reader.fail(
+                "alarm_metric", f"must be a watched scalar metric, got {alarm_metric!r}"
+            )
+        if threshold is None:
+            raise reader.fail("alarm_threshold", "is required when alarm_metric is given")
+    on_alarm = reader.string("on_alarm", "warn", choices=ON_ALARM_ACTIONS)
+    return WatchSpec(tuple(metrics), alarm_metric, threshold, on_alarm)
+
+
+def parse_scene(
+    table: dict[str, Any], *, source: str = "<scene>", base_dir: Path | None = None
+) -> Scene:
+    """Validate a scene given as a TOML-like table.
+
+    Args:
+        table: The parsed TOML document.
+        source: Name used in error messages (the file path).
+        base_dir: Folder that relative URDF paths are resolved against.
+
+    Raises:
+        SceneError: The first bad key, as ``source: key: problem``.
+    """
+    reader = _Reader(source, table)
+    reader.check_keys(_TOP_KEYS, required=("robot", "duration", "sample"))
+    robot = _robot(reader, base_dir)
+    duration = reader.number("duration", positive=True)
+    sample = reader.number("sample", positive=True)
+    if sample > duration:
+        raise reader.fail("sample", f"must be <= duration ({duration} s), got {sample}")
+    dynamics = reader.sub("dynamics")
+    dynamics.check_keys({"backend"})
+    integrator = _integrator(reader.sub("integrator"))
+    if integrator.fixed_step:
+        ratio = sample / integrator.dt
+        if abs(ratio - round(ratio)) > 1e-9 * ratio:
+            raise SceneError(
+                source,
+                "sample",
+                f"must be a whole number of integrator.dt ({integrator.dt} s), got {sample}",
+            )
+    return Scene(
+        source=source,
+        robot=robot,
+        duration_s=duration,
+        sample_s=sample,
+        q=reader.joint_values("q", None),
+        v=reader.joint_values("v", 0.0),
+        effects=_effects(reader.sub("effects")),
+        integrator=integrator,
+        backend=dynamics.string("backend", "aba", choices=BACKENDS),
+        watch=_watch(reader.sub("watch")),
+        raw=table,
+    )
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file (TOML).
+
+    Raises:
+        SceneError: Missing or unreadable file, TOML syntax error, or a bad key.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError as exc:
+        raise SceneError(str(path), "", "no such file") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(str(path), "", f"cannot be read ({exc.__class__.__name__})") from exc
+    try:
+        table = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(str(path), "", f"is not valid TOML ({exc})") from exc
+    return parse_scene(table, source=str(path), base_dir=path.parent)

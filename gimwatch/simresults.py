@@ -1,0 +1,205 @@
+"""The results folder of a simulation: arrays, CSV, ``summary.json`` and PNG plots.
+
+Layout of ``DIR``::
+
+    trajectory.npz   t, q, v, energy (if conservative), watch_t, watch_<metric>
+    trajectory.csv   t, q..., v...
+    watch.csv        t and one column per scalar metric (when something is watched)
+    summary.json     scene echo, versions, wall time, steps, RHS evaluations, status,
+                     energy drift (conservative scenes), estimator quality, alarms
+    *.png            joint coordinates, watched metrics, energy drift
+
+The folder is built next to ``DIR`` under a temporary name and renamed into place, so a
+failed or interrupted write never leaves a half-written folder, and an existing good
+result is replaced only by a complete one.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import shutil
+import tempfile
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gimwatch._version import __version__
+from gimwatch.errors import OutputError
+from gimwatch.results import (
+    prepare_directory,
+    write_json_atomic,
+    write_npz_atomic,
+    write_text_atomic,
+)
+from gimwatch.simulate import Trajectory
+from gimwatch.watch import estimator_quality
+
+__all__ = ["summarize", "versions", "write_simulation"]
+
+
+def versions() -> dict[str, str]:
+    """Versions of Python and of the libraries a result depends on."""
+    import matplotlib
+    import pinocchio
+    import scipy
+
+    return {
+        "gimwatch": __version__,
+        "python": platform.python_version(),
+        "pinocchio": pinocchio.__version__,
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "matplotlib": matplotlib.__version__,
+    }
+
+
+def summarize(trajectory: Trajectory) -> dict[str, Any]:
+    """The JSON-ready summary of a run (see the module docstring)."""
+    scene = trajectory.scene
+    watch = trajectory.watch
+    quality: Any = "needs kappa and diagonal_ratio (or scaled_diagonal_ratio) watched"
+    if "watch_kappa" in watch:
+        delta = watch.get("watch_diagonal_ratio")
+        if delta is None and "watch_scaled_diagonal_ratio" in watch:
+            delta = watch["watch_scaled_diagonal_ratio"]  # αδ ∝ δ: α cancels in α₀δ/α₀δ₀
+        if delta is not None:
+            result = estimator_quality(watch["watch_kappa"], delta)
+            quality = asdict(result) if result else "fewer than 3 samples"
+    maxima = {
+        key.removeprefix("watch_"): float(np.max(value))
+        for key, value in watch.items()
+        if key != "watch_t" and value.ndim == 1 and value.size
+    }
+    return {
+        "scene": {"source": scene.source, **scene.raw},
+        "robot": trajectory.robot,
+        "effects": list(trajectory.effects),
+        "backend": scene.backend,
+        "integrator": asdict(scene.integrator),
+        "versions": versions(),
+        "status": trajectory.status,
+        "message": trajectory.message,
+        "simulated_time_s": float(trajectory.t[-1]) if trajectory.t.size else 0.0,
+        "samples": int(trajectory.t.size),
+        "steps": trajectory.steps,
+        "rhs_evaluations": trajectory.rhs_evaluations,
+        "wall_time_s": trajectory.wall_time_s,
+        "conservative": trajectory.conservative,
+        "energy_drift_relative": trajectory.energy_drift(),
+        "watched": list(scene.watch.metrics),
+        "watch_maxima": maxima,
+        "alpha": trajectory.alpha,
+        "estimator_quality": quality,
+        "alarms": [asdict(alarm) for alarm in trajectory.alarms],
+    }
+
+
+def _csv(header: list[str], columns: list[np.ndarray]) -> str:
+    rows = np.column_stack(columns) if columns else np.empty((0, 0))
+    lines = [",".join(header)]
+    lines += [",".join(repr(float(x)) for x in row) for row in rows]
+    return "\n".join(lines) + "\n"
+
+
+def _plots(trajectory: Trajectory, folder: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    from gimwatch import plots
+
+    def save(name, draw):
+        fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+        draw(ax)
+        fig.savefig(folder / name, dpi=110)
+        plt.close(fig)
+
+    t, watch = trajectory.t, trajectory.watch
+    save("joints.png", lambda ax: plots.plot_joint_angles(t, trajectory.q, ax=ax))
+    if trajectory.energy is not None and trajectory.energy.size:
+        save("energy.png", lambda ax: plots.plot_energy(t, trajectory.energy, ax=ax))
+    wt = watch.get("watch_t")
+    if wt is None or wt.size == 0:
+        return
+    if "watch_kappa" in watch and "watch_diagonal_ratio" in watch:
+        save(
+            "kappa_delta.png",
+            lambda ax: plots.plot_kappa_and_delta(
+                wt, watch["watch_kappa"], watch["watch_diagonal_ratio"], ax=ax
+            ),
+        )
+    if "watch_kappa" in watch and "watch_scaled_diagonal_ratio" in watch:
+        save(
+            "kappa_scaled.png",
+            lambda ax: plots.plot_kappa_and_scaled(
+                wt, watch["watch_kappa"], watch["watch_scaled_diagonal_ratio"], ax=ax
+            ),
+        )
+    if "watch_pivot_ratio_forward" in watch:
+        save(
+            "pivot_ratios.png",
+            lambda ax: plots.plot_pivot_ratios(
+                wt,
+                watch["watch_pivot_ratio_forward"],
+                watch.get("watch_pivot_ratio_backward"),
+                watch.get("watch_kappa"),
+                ax=ax,
+            ),
+        )
+    if "watch_eigenvalues" in watch:
+        save(
+            "eigenvalues.png",
+            lambda ax: plots.plot_eigenvalues(wt, watch["watch_eigenvalues"], ax=ax),
+        )
+    if "watch_diagonal" in watch:
+        save("diagonal.png", lambda ax: plots.plot_diagonal(wt, watch["watch_diagonal"], ax=ax))
+
+
+def write_simulation(trajectory: Trajectory, directory: str | Path, *, plots: bool = True) -> Path:
+    """Write the results folder of ``trajectory`` to ``directory`` (replaced atomically)."""
+    directory = Path(directory).resolve()
+    if directory.exists() and not directory.is_dir():
+        raise OutputError(str(directory), "is a file, not a folder; give a folder name")
+    prepare_directory(directory.parent)
+    staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
+    try:
+        arrays = {"t": trajectory.t, "q": trajectory.q, "v": trajectory.v, **trajectory.watch}
+        if trajectory.energy is not None:
+            arrays["energy"] = trajectory.energy
+        write_npz_atomic(staging / "trajectory.npz", arrays)
+        names = list(trajectory.dof_names)
+        nq = trajectory.q.shape[1]
+        q_names = names if nq == len(names) else [f"q{i}" for i in range(nq)]
+        header = ["t", *(f"q:{n}" for n in q_names), *(f"v:{n}" for n in names)]
+        write_text_atomic(
+            staging / "trajectory.csv",
+            _csv(header, [trajectory.t, *trajectory.q.T, *trajectory.v.T]),
+        )
+        scalar = {k: v for k, v in trajectory.watch.items() if k != "watch_t" and v.ndim == 1}
+        if scalar:
+            write_text_atomic(
+                staging / "watch.csv",
+                _csv(
+                    ["t", *(k.removeprefix("watch_") for k in scalar)],
+                    [trajectory.watch["watch_t"], *scalar.values()],
+                ),
+            )
+        write_json_atomic(staging / "summary.json", summarize(trajectory))
+        if plots and trajectory.t.size:
+            _plots(trajectory, staging)
+        os.chmod(staging, 0o755)
+        if directory.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{directory.name}.old.", dir=directory.parent))
+            os.replace(directory, old / "previous")
+            os.replace(staging, directory)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(staging, directory)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+    return directory

@@ -1,0 +1,352 @@
+"""Simulate a scene: declared effects + a dynamics backend + an integrator, watched at samples.
+
+The state is x = (q, v). One right-hand-side evaluation is
+``ẋ = (v, FD(q, v, Σ τ_e(t, q, v)))``: the sum runs over the *declared* torque effects only
+(none declared: a constant zero vector), and FD is one call into the backend (Pinocchio's
+C++ recursions for ``aba`` and ``crba-cholesky``), so there is no Python loop over joints.
+
+Integrators: SciPy's ``RK45``, ``DOP853``, ``Radau`` and ``LSODA`` (adaptive, ``rtol``/
+``atol``), driven step by step so that samples come from the solver's dense output, a
+progress callback runs between steps and Ctrl-C keeps what was computed; and fixed-step
+``RK4`` and semi-implicit (symplectic) Euler with step ``dt``. The watch and the energy are
+evaluated at the sample times only, never inside the right-hand side.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+import scipy.integrate
+
+from gimwatch.backends import make_backend, model_with_gravity
+from gimwatch.chains import chain_spec, generate_chain_urdf
+from gimwatch.effects import build_effects, joint_vector
+from gimwatch.errors import GimwatchError, SceneError, SimulationError
+from gimwatch.robots import Robot, load_robot, neutral_configuration
+from gimwatch.scene import Scene
+from gimwatch.watch import Alarm, Watch
+
+__all__ = ["STATUSES", "Simulation", "Trajectory", "load_scene_robot", "run_scene"]
+
+STATUSES = ("completed", "interrupted", "stopped-on-alarm", "diverged", "failed")
+_SCIPY = {
+    "RK45": scipy.integrate.RK45,
+    "DOP853": scipy.integrate.DOP853,
+    "Radau": scipy.integrate.Radau,
+    "LSODA": scipy.integrate.LSODA,
+}
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """What a run computed, up to where it stopped.
+
+    Attributes:
+        scene: The scene that was run.
+        robot: Robot name.
+        dof_names: Names of the velocity coordinates.
+        t: Sample times (s), shape (K,).
+        q: Configurations at the samples, shape (K, nq).
+        v: Velocities at the samples, shape (K, nv).
+        energy: Total energy (J) at the samples when the scene is conservative, else None.
+        watch: Watch series (``watch_t`` and ``watch_<metric>``), possibly empty.
+        alpha: α of the scaled diagonal ratio when watched.
+        alarms: Alarms raised, in time order.
+        status: One of :data:`STATUSES`.
+        message: Why the run stopped early ("" when completed).
+        steps: Integrator steps taken.
+        rhs_evaluations: Right-hand-side (forward-dynamics) evaluations.
+        wall_time_s: Wall time of the integration loop.
+    """
+
+    scene: Scene
+    robot: str
+    dof_names: tuple[str, ...]
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    energy: np.ndarray | None
+    watch: dict[str, np.ndarray]
+    alpha: float | None
+    alarms: tuple[Alarm, ...]
+    status: str
+    message: str
+    steps: int
+    rhs_evaluations: int
+    wall_time_s: float
+    effects: tuple[str, ...] = field(default=())
+    kinetic_peak: float = 0.0
+
+    @property
+    def conservative(self) -> bool:
+        """Whether the energy is a conserved quantity of this scene."""
+        return self.energy is not None
+
+    def energy_drift(self) -> float | None:
+        """Relative energy drift max_t |E(t) - E(0)| / max(|E(0)|, max_t KE(t)).
+
+        The chains start at rest where E(0) = 0 (potential zero at the horizontal), so the
+        scale is the larger of |E(0)| and the peak kinetic energy (J): the energy the
+        effects exchanged. None when the scene is not conservative.
+        """
+        if self.energy is None or self.energy.size == 0:
+            return None
+        deviation = float(np.max(np.abs(self.energy - self.energy[0])))
+        return deviation / max(abs(float(self.energy[0])), self.kinetic_peak, 1e-300)
+
+    def raise_for_status(self) -> None:
+        """Raise :class:`SimulationError` if the run diverged or the solver failed."""
+        if self.status in ("diverged", "failed"):
+            raise SimulationError(float(self.t[-1]) if self.t.size else 0.0, self.message)
+
+
+def _chain_robot(params: dict, floating: bool) -> Robot:
+    from gimwatch.robots import _build_model
+
+    options = {k: v for k, v in params.items() if k != "n"}
+    spec = chain_spec(params["n"], **options)
+    xml = generate_chain_urdf(spec)
+    source = f"<generated {spec.name}>"
+    model = _build_model(xml, source, floating)
+    return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
+
+
+def load_scene_robot(scene: Scene) -> Robot:
+    """Load the scene's robot; failures become a :class:`SceneError` on key ``robot``."""
+    try:
+        if scene.robot.chain is not None:
+            return _chain_robot(scene.robot.chain, scene.robot.floating)
+        return load_robot(scene.robot.spec, floating=scene.robot.floating)
+    except SceneError:
+        raise
+    except GimwatchError as exc:
+        raise scene.error("robot", str(exc)) from exc
+
+
+class Simulation:
+    """A scene made ready to run: robot, declared effects, backend, integrator, watch.
+
+    Building it validates everything that needs the robot (joint and link names, lengths);
+    nothing is integrated until :meth:`run`.
+    """
+
+    def __init__(self, scene: Scene) -> None:
+        self.scene = scene
+        robot = self.robot = load_scene_robot(scene)
+        self.effects = build_effects(robot, scene.effects, source=scene.source)
+        gravity = next((e.vector for e in self.effects if e.name == "gravity"), None)
+        self.gravity = gravity
+        self.torque_effects = [e for e in self.effects if e.adds_torque]
+        self.backend = make_backend(scene.backend, robot, gravity)
+        self._zero_tau = np.zeros(robot.nv)
+        self._zero_tau.setflags(write=False)
+        q0 = neutral_configuration(robot)
+        self.q0 = (
+            q0
+            if scene.q is None
+            else joint_vector(robot, scene.q, source=scene.source, key="q", space="q", default=q0)
+        )
+        self.v0 = joint_vector(robot, scene.v, source=scene.source, key="v")
+        self.euclidean = robot.nq == robot.nv
+        if not self.euclidean and not scene.integrator.fixed_step:
+            raise scene.error(
+                "integrator.method",
+                f"{scene.integrator.method} integrates q as a vector; {robot.name} has "
+                "quaternion coordinates: use RK4 or semi-implicit-euler",
+            )
+        self.conservative = all(e.conservative for e in self.effects)
+        if self.conservative:
+            self._energy_model = model_with_gravity(robot, gravity)
+            self._energy_data = self._energy_model.createData()
+        spec = scene.watch
+        self.watch = Watch(
+            robot,
+            spec.metrics,
+            alarm_metric=spec.alarm_metric,
+            alarm_threshold=spec.alarm_threshold,
+        )
+        self.rhs_evaluations = 0
+
+    # -- dynamics ------------------------------------------------------------------------
+    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Σ τ_e over the declared torque effects (N·m or N), length nv."""
+        if not self.torque_effects:
+            return self._zero_tau
+        total = self.torque_effects[0].tau(t, q, v)
+        for effect in self.torque_effects[1:]:
+            total = total + effect.tau(t, q, v)
+        return total
+
+    def acceleration(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """A = FD(q, v, τ(t, q, v)) from the backend; counts one RHS evaluation."""
+        self.rhs_evaluations += 1
+        return self.backend.forward_dynamics(q, v, self.tau(t, q, v))
+
+    def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
+        """ẋ = (v, a) for x = (q, v) (Euclidean q only)."""
+        nq = self.robot.nq
+        q, v = x[:nq], x[nq:]
+        return np.concatenate((v, self.acceleration(t, q, v)))
+
+    def energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic + gravity potential + spring energy (J), Pinocchio's energy functions."""
+        model, data = self._energy_model, self._energy_data
+        kinetic = pin.computeKineticEnergy(model, data, q, v)
+        potential = pin.computePotentialEnergy(model, data, q)
+        return float(kinetic + potential + sum(e.potential_energy(q) for e in self.effects))
+
+    def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic energy ½ vᵀ M v (J)."""
+        return float(pin.computeKineticEnergy(self._energy_model, self._energy_data, q, v))
+
+    # -- running -------------------------------------------------------------------------
+    def _integrate_q(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        return q + dq if self.euclidean else pin.integrate(self.robot.model, q, dq)
+
+    def _fixed_steps(self, record, progress):
+        spec = self.scene.integrator
+        dt = spec.dt
+        n_steps = round(self.scene.duration_s / dt)
+        every = round(self.scene.sample_s / dt)
+        q, v = self.q0.copy(), self.v0.copy()
+        f = self.acceleration
+        for k in range(n_steps):
+            t = k * dt
+            if spec.method == "RK4":
+                a1 = f(t, q, v)
+                q2, v2 = self._integrate_q(q, 0.5 * dt * v), v + 0.5 * dt * a1
+                a2 = f(t + 0.5 * dt, q2, v2)
+                q3, v3 = self._integrate_q(q, 0.5 * dt * v2), v + 0.5 * dt * a2
+                a3 = f(t + 0.5 * dt, q3, v3)
+                q4, v4 = self._integrate_q(q, dt * v3), v + dt * a3
+                a4 = f(t + dt, q4, v4)
+                q = self._integrate_q(q, dt / 6.0 * (v + 2 * v2 + 2 * v3 + v4))
+                v = v + dt / 6.0 * (a1 + 2 * a2 + 2 * a3 + a4)
+            else:  # semi-implicit Euler: v first, then q with the new v
+                v = v + dt * f(t, q, v)
+                q = self._integrate_q(q, dt * v)
+            self.steps += 1
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                return "diverged", f"non-finite state after step {k + 1} (t = {t + dt:.6g} s)"
+            if (k + 1) % every == 0:
+                stop = record((k + 1) * dt, q, v)
+                if stop:
+                    return stop
+            if progress is not None:
+                progress((k + 1) / n_steps)
+        return "completed", ""
+
+    def _scipy_steps(self, record, progress, sample_times):
+        spec = self.scene.integrator
+        x0 = np.concatenate((self.q0, self.v0))
+        solver = _SCIPY[spec.method](
+            self.rhs,
+            0.0,
+            x0,
+            self.scene.duration_s,
+            rtol=spec.rtol,
+            atol=spec.atol,
+            max_step=spec.max_step,
+        )
+        nq = self.robot.nq
+        next_sample = 1
+        while solver.status == "running":
+            message = solver.step()
+            if solver.status == "failed":
+                return "failed", f"{spec.method} failed: {message}"
+            self.steps += 1
+            if not np.all(np.isfinite(solver.y)):
+                return "diverged", f"non-finite state at t = {solver.t:.6g} s"
+            due = next_sample
+            while due < sample_times.size and sample_times[due] <= solver.t + 1e-12:
+                due += 1
+            if due > next_sample:
+                dense = solver.dense_output()
+                for ts in sample_times[next_sample:due]:
+                    x = solver.y if ts == solver.t else dense(min(ts, solver.t))
+                    stop = record(float(ts), x[:nq], x[nq:])
+                    if stop:
+                        return stop
+                next_sample = due
+            if progress is not None:
+                progress(solver.t / self.scene.duration_s)
+        return "completed", ""
+
+    def run(self, *, progress: Callable[[float], None] | None = None) -> Trajectory:
+        """Integrate from t = 0 to the scene's duration; stop early on divergence or alarm.
+
+        Args:
+            progress: Called with the fraction done (0..1) after each integrator step.
+
+        Returns:
+            The :class:`Trajectory` up to where the run stopped (Ctrl-C included).
+        """
+        scene = self.scene
+        count = int(np.floor(scene.duration_s / scene.sample_s + 1e-9)) + 1
+        sample_times = np.arange(count) * scene.sample_s
+        ts, qs, vs, energies, kinetic = [], [], [], [], [0.0]
+        self.steps = 0
+        self.rhs_evaluations = 0
+
+        def record(t, q, v):
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                return "diverged", f"non-finite state at t = {t:.6g} s"
+            ts.append(t)
+            qs.append(np.array(q))
+            vs.append(np.array(v))
+            if self.conservative:
+                energies.append(self.energy(q, v))
+                kinetic.append(self.kinetic_energy(q, v))
+            alarm = self.watch.sample(t, q)
+            if alarm is not None and scene.watch.on_alarm == "stop":
+                return (
+                    "stopped-on-alarm",
+                    f"{alarm.metric} = {alarm.value:.4g} crossed {alarm.threshold:.4g} "
+                    f"at t = {t:.6g} s",
+                )
+            return None
+
+        start = time.perf_counter()
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):  # divergence is checked per step
+                outcome = record(0.0, self.q0, self.v0) or (
+                    self._fixed_steps(record, progress)
+                    if scene.integrator.fixed_step
+                    else self._scipy_steps(record, progress, sample_times)
+                )
+        except KeyboardInterrupt:
+            outcome = ("interrupted", "interrupted by the user (Ctrl-C)")
+        wall = time.perf_counter() - start
+        status, message = outcome
+        watch = self.watch.arrays() if self.watch.metrics else {}
+        if watch:  # an interrupted sample may have left the series one longer than t
+            k = min(len(ts), *(len(v) for v in watch.values()))
+            watch = {key: value[:k] for key, value in watch.items()}
+        return Trajectory(
+            scene=scene,
+            robot=self.robot.name,
+            dof_names=self.robot.dof_names,
+            t=np.asarray(ts, dtype=float),
+            q=np.asarray(qs, dtype=float).reshape(len(ts), self.robot.nq),
+            v=np.asarray(vs, dtype=float).reshape(len(ts), self.robot.nv),
+            energy=np.asarray(energies[: len(ts)], dtype=float) if self.conservative else None,
+            watch=watch,
+            alpha=self.watch.alpha,
+            alarms=tuple(self.watch.alarms),
+            status=status,
+            message=message,
+            steps=self.steps,
+            rhs_evaluations=self.rhs_evaluations,
+            wall_time_s=wall,
+            effects=scene.effect_names,
+            kinetic_peak=float(max(kinetic)),
+        )
+
+
+def run_scene(scene: Scene, *, progress: Callable[[float], None] | None = None) -> Trajectory:
+    """Build and run a scene (see :class:`Simulation`)."""
+    return Simulation(scene).run(progress=progress)

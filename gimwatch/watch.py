@@ -1,0 +1,294 @@
+"""The GIM watch: the requested conditioning metrics of M(q) at sample times, and alarms.
+
+Metrics come from :data:`METRICS`, keyed by the scene's names; a metric nobody watches is
+never built, so its cost is never paid. Per sample, the expensive quantities are computed
+at most once and only when a watched metric needs them:
+
+* ``diag M`` — from :func:`gimwatch.inertia.gim_diagonal` (O(n), no M formed) when no
+  watched metric needs the full matrix, else read off M;
+* ``M`` — from Pinocchio's CRBA (:func:`gimwatch.inertia.gim`), O(n²);
+* the spectrum — a symmetric eigen-solve, O(n³), only for ``kappa`` / ``eigenvalues``
+  (and once, at t0, to calibrate α of ``scaled_diagonal_ratio``, Shah & Saha 2013 Eq. 15).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from gimwatch import conditioning
+from gimwatch.inertia import gim, gim_diagonal
+from gimwatch.robots import Robot
+
+__all__ = ["METRICS", "Alarm", "EstimatorQuality", "Watch", "estimator_quality"]
+
+
+class _GimState:
+    """Lazily computed, shared per-sample quantities of M(q)."""
+
+    def __init__(self, robot: Robot, data, q: np.ndarray, full: bool) -> None:
+        self.robot, self.data, self.q, self.full = robot, data, q, full
+        self._M = self._diag = self._eig = None
+
+    @property
+    def M(self) -> np.ndarray:
+        if self._M is None:
+            self._M = conditioning.check_gim(gim(self.robot, self.q, data=self.data))
+        return self._M
+
+    @property
+    def diag(self) -> np.ndarray:
+        if self._diag is None:
+            self._diag = (
+                np.diag(self.M).copy()
+                if self.full
+                else gim_diagonal(self.robot, self.q, data=self.data)
+            )
+        return self._diag
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        if self._eig is None:
+            self._eig = conditioning.eigenvalues(self.M)
+        return self._eig
+
+
+class Metric:
+    """One watched quantity. ``full``: needs M (not only its diagonal)."""
+
+    name: ClassVar[str]
+    full: ClassVar[bool] = True
+    vector: ClassVar[bool] = False
+
+    def __call__(self, state: _GimState):
+        raise NotImplementedError
+
+    def severity(self, value: float) -> float:
+        """The value on a condition-number scale (large = ill-conditioned), for alarms."""
+        return value
+
+
+class Kappa(Metric):
+    """κ₂ = λmax / λmin (Eq. 6)."""
+
+    name = "kappa"
+
+    def __call__(self, state):
+        values = state.eigenvalues
+        return float(values[-1] / values[0])
+
+
+class DiagonalRatio(Metric):
+    """δ = max M_ii / min M_ii (Sec. 4), from the O(n) diagonal."""
+
+    name = "diagonal_ratio"
+    full = False
+
+    def __call__(self, state):
+        return conditioning.diagonal_ratio(state.diag)
+
+
+class ScaledDiagonalRatioMetric(Metric):
+    """αδ with α = κ(t0)/δ(t0) fixed at the first sample (Eq. 15)."""
+
+    name = "scaled_diagonal_ratio"
+    full = False
+
+    def __init__(self) -> None:
+        self.estimator = conditioning.ScaledDiagonalRatio()
+
+    def __call__(self, state):
+        if not self.estimator.calibrated:
+            self.estimator.calibrate(state.M)
+        return self.estimator(state.diag)
+
+
+class PivotRatioForward(Metric):
+    """max/min LDLᵀ pivot (the paper's Gaussian elimination, Fig. 4)."""
+
+    name = "pivot_ratio_forward"
+
+    def __call__(self, state):
+        return conditioning.pivot_ratio_forward(state.M)
+
+
+class PivotRatioBackward(Metric):
+    """max/min UDUᵀ pivot (elimination from the tips)."""
+
+    name = "pivot_ratio_backward"
+
+    def __call__(self, state):
+        return conditioning.pivot_ratio_backward(state.M)
+
+
+class Rcond(Metric):
+    """LAPACK's reciprocal condition estimate 1/κ₁ (``dpocon``)."""
+
+    name = "rcond"
+
+    def __call__(self, state):
+        return 1.0 / conditioning.condition_estimate_1norm(state.M)
+
+    def severity(self, value: float) -> float:
+        return 1.0 / value
+
+
+class Eigenvalues(Metric):
+    """The spectrum of M, ascending (Fig. 2a)."""
+
+    name = "eigenvalues"
+    vector = True
+
+    def __call__(self, state):
+        return state.eigenvalues.copy()
+
+
+class Diagonal(Metric):
+    """diag M in Pinocchio's coordinate order (Fig. 2b)."""
+
+    name = "diagonal"
+    full = False
+    vector = True
+
+    def __call__(self, state):
+        return state.diag.copy()
+
+
+#: The registry: scene metric name -> class.
+METRICS: dict[str, type[Metric]] = {
+    cls.name: cls
+    for cls in (
+        Kappa,
+        DiagonalRatio,
+        ScaledDiagonalRatioMetric,
+        PivotRatioForward,
+        PivotRatioBackward,
+        Rcond,
+        Eigenvalues,
+        Diagonal,
+    )
+}
+
+
+@dataclass(frozen=True)
+class Alarm:
+    """The alarm metric crossed its threshold at ``time_s`` (upward crossing)."""
+
+    time_s: float
+    metric: str
+    value: float
+    threshold: float
+
+
+class Watch:
+    """Evaluates the requested metrics at samples and raises alarms.
+
+    Args:
+        robot: The robot.
+        metrics: Names from :data:`METRICS`; only these are built and evaluated.
+        alarm_metric: One of ``metrics`` (or None for no alarm).
+        alarm_threshold: Threshold on the metric's condition-number scale.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        metrics: tuple[str, ...] = (),
+        *,
+        alarm_metric: str | None = None,
+        alarm_threshold: float | None = None,
+    ) -> None:
+        self.robot = robot
+        self.metrics = {name: METRICS[name]() for name in metrics}
+        self.full = any(m.full for m in self.metrics.values())
+        self.data = robot.new_data() if self.metrics else None
+        self.alarm_metric, self.alarm_threshold = alarm_metric, alarm_threshold
+        self.times: list[float] = []
+        self.series: dict[str, list] = {name: [] for name in self.metrics}
+        self.alarms: list[Alarm] = []
+        self._alarm_on = False
+
+    def sample(self, t: float, q: np.ndarray) -> Alarm | None:
+        """Record the watched metrics at time ``t`` (s); return a new alarm, if one is raised."""
+        if not self.metrics:
+            return None
+        state = _GimState(self.robot, self.data, q, self.full)
+        self.times.append(float(t))
+        for name, metric in self.metrics.items():
+            self.series[name].append(metric(state))
+        if self.alarm_metric is None:
+            return None
+        value = self.series[self.alarm_metric][-1]
+        above = self.metrics[self.alarm_metric].severity(value) > self.alarm_threshold
+        alarm = None
+        if above and not self._alarm_on:
+            alarm = Alarm(float(t), self.alarm_metric, float(value), float(self.alarm_threshold))
+            self.alarms.append(alarm)
+        self._alarm_on = above
+        return alarm
+
+    @property
+    def alpha(self) -> float | None:
+        """α of the scaled diagonal ratio, when watched and calibrated."""
+        metric = self.metrics.get("scaled_diagonal_ratio")
+        return None if metric is None else metric.estimator.alpha
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The series as arrays, keyed ``watch_<metric>`` plus ``watch_t``."""
+        out = {"watch_t": np.asarray(self.times, dtype=float)}
+        for name, values in self.series.items():
+            out[f"watch_{name}"] = np.asarray(values, dtype=float)
+        return out
+
+
+@dataclass(frozen=True)
+class EstimatorQuality:
+    """How well δ tracks κ along a run (α from t0 only, never tuned).
+
+    Attributes:
+        samples: Number of samples compared.
+        alpha: α = κ(t0)/δ(t0) (Eq. 15).
+        pearson_log: Pearson correlation of log δ vs log κ.
+        spearman: Spearman rank correlation of δ vs κ.
+        median_relative_error: median |αδ - κ| / κ.
+        max_relative_error: max |αδ - κ| / κ.
+        max_kappa: Largest κ seen.
+        max_scaled_diagonal_ratio: Largest αδ seen.
+    """
+
+    samples: int
+    alpha: float
+    pearson_log: float
+    spearman: float
+    median_relative_error: float
+    max_relative_error: float
+    max_kappa: float
+    max_scaled_diagonal_ratio: float
+
+
+def estimator_quality(kappa: np.ndarray, delta: np.ndarray) -> EstimatorQuality | None:
+    """Compare δ (and αδ, α = κ₀/δ₀) with κ along a series; None with fewer than 3 samples."""
+    from scipy import stats
+
+    kappa, delta = np.asarray(kappa, dtype=float), np.asarray(delta, dtype=float)
+    if kappa.size < 3:
+        return None
+    alpha = kappa[0] / delta[0]
+    scaled = alpha * delta
+    error = np.abs(scaled - kappa) / kappa
+    constant = np.ptp(np.log(delta)) == 0 or np.ptp(np.log(kappa)) == 0
+    pearson = math.nan if constant else float(stats.pearsonr(np.log(delta), np.log(kappa))[0])
+    spearman = math.nan if constant else float(stats.spearmanr(delta, kappa)[0])
+    return EstimatorQuality(
+        samples=int(kappa.size),
+        alpha=float(alpha),
+        pearson_log=pearson,
+        spearman=spearman,
+        median_relative_error=float(np.median(error)),
+        max_relative_error=float(np.max(error)),
+        max_kappa=float(np.max(kappa)),
+        max_scaled_diagonal_ratio=float(np.max(scaled)),
+    )

@@ -1,0 +1,304 @@
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from gimwatch.analysis import analyze_configuration
+from gimwatch.robots import load_robot
+from gimwatch.scene import parse_scene
+from gimwatch.simulate import Simulation, run_scene
+
+GRAVITY = {"gravity": {"vector": [0.0, -9.81, 0.0]}}
+ROD_MASS, ROD_LENGTH = 2.2, 1.0
+ROD_INERTIA = ROD_MASS * ROD_LENGTH**2 / 3  # slender rod about its end
+
+
+def scene(robot="chain:4", *, duration=1.0, sample=0.01, effects=None, integrator=None, **extra):
+    table = {"robot": robot, "duration": duration, "sample": sample, **extra}
+    if effects:
+        table["effects"] = effects
+    table["integrator"] = integrator or {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10}
+    return parse_scene(table, source="test.toml")
+
+
+@pytest.mark.parametrize("n", [4, 10, 20])
+def test_swinging_chain_conserves_energy_and_worst_kappa_is_near_4n4(n):
+    trajectory = run_scene(
+        scene(
+            f"chain:{n}",
+            duration=5.0,
+            sample=0.05,
+            effects=GRAVITY,
+            watch={"metrics": ["kappa"]},
+        )
+    )
+    assert trajectory.status == "completed" and trajectory.t[-1] == pytest.approx(5.0)
+    drift = trajectory.energy_drift()
+    assert drift < 1e-8, drift
+    # the chain really swung: kinetic energy of the order of the potential energy released
+    assert trajectory.kinetic_peak > 0.1 * ROD_MASS * 9.81 * n
+    worst = trajectory.watch["watch_kappa"].max()
+    assert worst == pytest.approx(4 * n**4, rel=0.15), (worst, 4 * n**4)
+    # independent check of the watch: analyze the saved configuration again
+    k = len(trajectory.t) // 2
+    again = analyze_configuration(load_robot(f"chain:{n}"), trajectory.q[k]).kappa
+    assert trajectory.watch["watch_kappa"][k] == pytest.approx(again, rel=1e-12)
+
+
+def test_backends_agree_on_the_4_link_trajectory():
+    runs = {
+        backend: run_scene(
+            scene(duration=2.0, sample=0.1, effects=GRAVITY, dynamics={"backend": backend})
+        )
+        for backend in ("aba", "crba-cholesky")
+    }
+    a, b = runs["aba"], runs["crba-cholesky"]
+    assert np.abs(a.q - b.q).max() < 1e-8, np.abs(a.q - b.q).max()
+    assert np.abs(a.v - b.v).max() < 1e-8 * max(1.0, np.abs(a.v).max())
+
+
+def _reference_4_link(duration):
+    return run_scene(
+        scene(
+            duration=duration,
+            sample=duration,
+            effects=GRAVITY,
+            integrator={"method": "DOP853", "rtol": 1e-13, "atol": 1e-13},
+        )
+    )
+
+
+@pytest.mark.parametrize(
+    ("method", "order", "dts"),
+    [
+        ("RK4", 4, (0.01, 0.005, 0.0025)),
+        ("semi-implicit-euler", 1, (0.001, 0.0005, 0.00025)),
+    ],
+)
+def test_fixed_step_integrators_converge_at_their_order(method, order, dts):
+    duration = 0.5
+    reference = _reference_4_link(duration)
+    errors = []
+    for dt in dts:
+        run = run_scene(
+            scene(
+                duration=duration,
+                sample=duration,
+                effects=GRAVITY,
+                integrator={"method": method, "dt": dt},
+            )
+        )
+        x = np.concatenate((run.q[-1], run.v[-1]))
+        x_ref = np.concatenate((reference.q[-1], reference.v[-1]))
+        errors.append(np.abs(x - x_ref).max())
+    observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(observed - order) < 0.3), (errors, observed)
+
+
+@pytest.mark.parametrize("method", ["RK45", "DOP853", "Radau", "LSODA"])
+def test_scipy_methods_reach_the_reference(method):
+    duration = 0.5
+    reference = _reference_4_link(duration)
+    errors = []
+    for tol in (1e-6, 1e-9):
+        run = run_scene(
+            scene(
+                duration=duration,
+                sample=duration,
+                effects=GRAVITY,
+                integrator={"method": method, "rtol": tol, "atol": tol},
+            )
+        )
+        errors.append(np.abs(run.q[-1] - reference.q[-1]).max())
+    assert errors[1] < errors[0] and errors[1] < 1e-6, errors
+
+
+def test_rod_under_constant_and_sinusoidal_torque_matches_closed_form():
+    # one rod, no gravity: I q'' = tau0 + A sin(w t)
+    tau0, amplitude, freq = 0.3, 0.7, 1.5
+    omega = 2 * np.pi * freq
+    run = run_scene(
+        scene(
+            "chain:1",
+            duration=1.0,
+            sample=0.1,
+            effects={
+                "torque": {
+                    "law": "sinusoid",
+                    "value": tau0,
+                    "amplitude": amplitude,
+                    "frequency_hz": freq,
+                }
+            },
+        )
+    )
+    t = run.t
+    exact = (tau0 * t**2 / 2 + amplitude / omega * (t - np.sin(omega * t) / omega)) / ROD_INERTIA
+    np.testing.assert_allclose(run.q[:, 0], exact, rtol=1e-8, atol=1e-10)
+
+
+def test_damped_rod_decays_exponentially_and_spring_oscillates():
+    c, v0 = 0.8, 2.0
+    run = run_scene(
+        scene("chain:1", duration=1.0, sample=0.1, v=v0, effects={"damping": {"coefficient": c}})
+    )
+    np.testing.assert_allclose(run.v[:, 0], v0 * np.exp(-c * run.t / ROD_INERTIA), rtol=1e-8)
+    assert run.energy is None  # damping is not conservative
+    k, q0 = 5.0, 0.4
+    run = run_scene(
+        scene(
+            "chain:1",
+            duration=2.0,
+            sample=0.1,
+            q=q0,
+            effects={"spring": {"stiffness": k, "rest": 0.0}},
+        )
+    )
+    omega = np.sqrt(k / ROD_INERTIA)
+    np.testing.assert_allclose(run.q[:, 0], q0 * np.cos(omega * run.t), atol=1e-8)
+    assert run.energy_drift() < 1e-8
+
+
+def test_pd_reaches_its_target_without_gravity():
+    run = run_scene(
+        scene(
+            "chain:2",
+            duration=10.0,
+            sample=0.5,
+            effects={"torque": {"law": "pd", "kp": 50.0, "kd": 20.0, "target": [0.5, -0.3]}},
+        )
+    )
+    np.testing.assert_allclose(run.q[-1], [0.5, -0.3], atol=1e-4)
+
+
+def test_wrench_equals_the_closed_form_joint_torques():
+    # planar 2-rod chain at q = (0.3, 0.5): a force f at link_2's origin (the elbow, in
+    # world axes) gives tau_1 = (p_elbow x f)_z and tau_2 = 0; a torque n_z gives n_z on both.
+    sim = Simulation(
+        scene(
+            "chain:2",
+            effects={
+                "wrench": {"link": "link_2", "force": [1.0, 2.0, 0.0], "torque": [0.0, 0.0, 0.25]}
+            },
+        )
+    )
+    q = np.array([0.3, 0.5])
+    elbow = np.array([np.cos(0.3), np.sin(0.3)])
+    expected = [elbow[0] * 2.0 - elbow[1] * 1.0 + 0.25, 0.25]
+    np.testing.assert_allclose(sim.tau(0.0, q, np.zeros(2)), expected, rtol=1e-12)
+
+
+def test_no_gravity_means_zero_model_gravity_and_no_gravity_term(monkeypatch):
+    calls = {"gravity": 0}
+    for name in ("computeGeneralizedGravity", "rnea", "nonLinearEffects"):
+        original = getattr(pin, name)
+
+        def counting(*args, _original=original, **kwargs):
+            calls["gravity"] += 1
+            return _original(*args, **kwargs)
+
+        monkeypatch.setattr(pin, name, counting)
+    sim = Simulation(scene("chain:3", v=0.5))
+    assert sim.gravity is None and not sim.torque_effects
+    assert np.all(sim.backend.model.gravity.linear == 0)
+    run = sim.run()
+    assert run.rhs_evaluations > 0 and calls["gravity"] == 0
+    # a free chain keeps its energy (kinetic only) with nothing declared
+    assert run.energy_drift() < 1e-8
+    sim = Simulation(scene("chain:3", effects=GRAVITY))
+    np.testing.assert_array_equal(sim.backend.model.gravity.linear, [0.0, -9.81, 0.0])
+
+
+def test_undeclared_velocity_effects_are_never_evaluated(monkeypatch):
+    from gimwatch import effects
+
+    counts = {"damping": 0}
+    original = effects.Damping.tau
+
+    def counting(self, t, q, v):
+        counts["damping"] += 1
+        return original(self, t, q, v)
+
+    monkeypatch.setattr(effects.Damping, "tau", counting)
+    run_scene(scene("chain:2", duration=0.2, effects=GRAVITY))
+    assert counts["damping"] == 0
+    run = run_scene(
+        scene("chain:2", duration=0.2, effects={**GRAVITY, "damping": {"coefficient": 0.1}})
+    )
+    assert counts["damping"] == run.rhs_evaluations > 0
+
+
+def test_divergence_stops_with_results_kept():
+    # explicit-ish Euler far beyond its stability limit on a stiff spring
+    run = run_scene(
+        scene(
+            "chain:1",
+            duration=100.0,
+            sample=1.0,
+            q=0.1,
+            effects={"spring": {"stiffness": 1e6}},
+            integrator={"method": "semi-implicit-euler", "dt": 0.5},
+        )
+    )
+    assert run.status == "diverged" and "non-finite" in run.message
+    assert 0 < run.t.size < 101 and np.all(np.isfinite(run.q))
+    from gimwatch.errors import SimulationError
+
+    with pytest.raises(SimulationError, match="simulation stopped at t = "):
+        run.raise_for_status()
+
+
+def test_on_alarm_stop_keeps_results_and_ctrl_c_keeps_them_too():
+    run = run_scene(
+        scene(
+            "chain:4",
+            duration=5.0,
+            sample=0.05,
+            effects=GRAVITY,
+            watch={"metrics": ["diagonal_ratio"], "alarm_threshold": 50.0, "on_alarm": "stop"},
+        )
+    )
+    # straight chain: delta = n^3 = 64 > 50 already at t = 0
+    assert run.status == "stopped-on-alarm" and run.t.size == 1
+    assert run.alarms[0].value == pytest.approx(64.0)
+    calls = []
+
+    def progress(fraction):
+        calls.append(fraction)
+        if len(calls) == 20:
+            raise KeyboardInterrupt
+
+    run = Simulation(
+        scene("chain:4", duration=5.0, sample=0.01, effects=GRAVITY, watch={"metrics": ["kappa"]})
+    ).run(progress=progress)
+    assert run.status == "interrupted" and 1 < run.t.size < 501
+    assert run.watch["watch_kappa"].size == run.t.size
+
+
+def test_floating_chain_falls_freely_with_a_fixed_step_integrator():
+    # no joint torques: the centre of mass of a free-floating body falls as g t^2 / 2
+    sim = Simulation(
+        scene(
+            "chain:2",
+            duration=1.0,
+            sample=0.1,
+            base="floating",
+            v=[0, 0, 0, 0, 0, 1.0, 0.5, 0.0],
+            effects=GRAVITY,
+            integrator={"method": "RK4", "dt": 0.01},
+        )
+    )
+    run = sim.run()
+    model, data = sim.robot.model, sim.robot.new_data()
+    com = np.array([pin.centerOfMass(model, data, q) for q in run.q])
+    expected = com[0] + np.outer(run.t**2 / 2, [0.0, -9.81, 0.0])
+    np.testing.assert_allclose(com, expected, atol=1e-7)
+    quaternion = run.q[:, 3:7]
+    np.testing.assert_allclose(np.linalg.norm(quaternion, axis=1), 1.0, atol=1e-12)
+    assert run.energy_drift() < 1e-6
+
+
+def test_floating_base_with_an_adaptive_method_is_refused():
+    from gimwatch.errors import SceneError
+
+    with pytest.raises(SceneError, match=r"test\.toml: integrator\.method: DOP853 integrates q"):
+        Simulation(scene("chain:2", base="floating"))

@@ -1,0 +1,141 @@
+import numpy as np
+import numpy.linalg
+import pinocchio as pin
+import pytest
+import scipy.linalg
+from conftest import planar_rod_chain_gim
+
+from gimwatch.robots import load_robot, random_configurations
+from gimwatch.scene import parse_scene
+from gimwatch.simulate import run_scene
+from gimwatch.watch import METRICS, Watch, estimator_quality
+
+ALL = (
+    "kappa",
+    "diagonal_ratio",
+    "scaled_diagonal_ratio",
+    "pivot_ratio_forward",
+    "pivot_ratio_backward",
+    "rcond",
+    "eigenvalues",
+    "diagonal",
+)
+
+
+def test_every_metric_matches_the_closed_form_gim():
+    robot = load_robot("chain:5")
+    qs = random_configurations(robot, 3, seed=7)
+    watch = Watch(robot, ALL)
+    for k, q in enumerate(qs):
+        watch.sample(0.1 * k, q)
+    M0 = planar_rod_chain_gim(qs[0], 2.2, 1.0)
+    for k, q in enumerate(qs):
+        M = planar_rod_chain_gim(q, 2.2, 1.0)
+        lam = np.linalg.eigvalsh(M)
+        d = np.diag(M)
+        L = np.linalg.cholesky(M)
+        U = np.linalg.cholesky(M[::-1, ::-1])
+        fwd, bwd = np.diag(L) ** 2, np.diag(U) ** 2
+        alpha = (np.linalg.cond(M0)) / (np.diag(M0).max() / np.diag(M0).min())
+        expected = {
+            "kappa": lam[-1] / lam[0],
+            "diagonal_ratio": d.max() / d.min(),
+            "scaled_diagonal_ratio": alpha * d.max() / d.min(),
+            "pivot_ratio_forward": fwd.max() / fwd.min(),
+            "pivot_ratio_backward": bwd.max() / bwd.min(),
+        }
+        for name, value in expected.items():
+            assert watch.series[name][k] == pytest.approx(value, rel=1e-9), name
+        np.testing.assert_allclose(watch.series["eigenvalues"][k], lam, rtol=1e-9)
+        np.testing.assert_allclose(watch.series["diagonal"][k], d, rtol=1e-12)
+        kappa1 = np.linalg.cond(M, 1)
+        rcond = watch.series["rcond"][k]
+        assert (
+            1 / kappa1 <= rcond * (1 + 1e-9) and rcond <= 3 / kappa1
+        )  # dpocon lower-bounds kappa_1
+
+
+def test_metric_registry_is_the_scene_vocabulary():
+    from gimwatch.scene import METRIC_NAMES
+
+    assert tuple(METRICS) == METRIC_NAMES
+
+
+@pytest.fixture
+def counters(monkeypatch):
+    counts = {"eig": 0, "crba": 0, "diag": 0}
+
+    def wrap(module, name, key):
+        original = getattr(module, name)
+
+        def counting(*args, **kwargs):
+            # Eigen-solves of 3x3 link inertias (URDF checks at load time) are not GIM work.
+            if key != "eig" or numpy.shape(args[0]) != (3, 3):
+                counts[key] += 1
+            return original(*args, **kwargs)
+
+        monkeypatch.setattr(module, name, counting)
+
+    for name in ("eigvalsh", "eigh", "eig", "eigvals"):
+        wrap(scipy.linalg, name, "eig")
+        wrap(numpy.linalg, name, "eig")
+    wrap(pin, "crba", "crba")
+    wrap(pin, "computeCentroidalMap", "diag")
+    return counts
+
+
+def _run(metrics):
+    table = {
+        "robot": "chain:6",
+        "duration": 0.5,
+        "sample": 0.05,
+        "effects": {"gravity": {"vector": [0.0, -9.81, 0.0]}},
+        "integrator": {"method": "RK4", "dt": 0.01},
+        "watch": {"metrics": list(metrics)},
+    }
+    return run_scene(parse_scene(table, source="t.toml"))
+
+
+def test_without_kappa_there_is_no_eigen_solve_and_no_mass_matrix(counters):
+    run = _run(["diagonal_ratio"])
+    assert run.t.size == 11 and run.watch["watch_diagonal_ratio"].size == 11
+    assert counters == {"eig": 0, "crba": 0, "diag": 11}
+
+
+def test_scaled_ratio_costs_one_eigen_solve_at_t0_only(counters):
+    _run(["scaled_diagonal_ratio"])
+    assert counters == {"eig": 1, "crba": 1, "diag": 11}
+
+
+def test_kappa_costs_one_eigen_solve_per_sample(counters):
+    _run(["kappa", "diagonal_ratio", "eigenvalues"])  # they share one solve per sample
+    assert counters == {"eig": 11, "crba": 11, "diag": 0}
+
+
+def test_nothing_watched_costs_nothing(counters):
+    run = _run([])
+    assert counters == {"eig": 0, "crba": 0, "diag": 0} and run.watch == {}
+
+
+def test_alarm_is_raised_on_upward_crossings_only():
+    robot = load_robot("chain:3")
+    watch = Watch(robot, ("diagonal_ratio",), alarm_metric="diagonal_ratio", alarm_threshold=20.0)
+    straight, bent = np.zeros(3), np.array([0.0, 0.0, 2.5])
+    # straight: delta = 27 > 20; bent tip: M_33 same, M_11 smaller -> below
+    raised = [
+        watch.sample(t, q) is not None for t, q in enumerate([straight, straight, bent, straight])
+    ]
+    assert raised == [True, False, False, True]
+    assert [a.time_s for a in watch.alarms] == [0.0, 3.0]
+
+
+def test_estimator_quality_uses_alpha_from_t0_only():
+    kappa = np.array([100.0, 200.0, 400.0, 300.0])
+    delta = np.array([10.0, 25.0, 40.0, 20.0])
+    quality = estimator_quality(kappa, delta)
+    assert quality.alpha == 10.0
+    errors = np.abs(10 * delta - kappa) / kappa
+    assert quality.median_relative_error == pytest.approx(np.median(errors))
+    assert quality.max_relative_error == pytest.approx(1 / 3)
+    assert quality.spearman == pytest.approx(0.8)
+    assert quality.pearson_log == pytest.approx(np.corrcoef(np.log(delta), np.log(kappa))[0, 1])
