@@ -36,6 +36,8 @@ from gimwatch.robots import (
     neutral_configuration,
     random_configurations,
 )
+from gimwatch.survey import RobotFailure, RobotSurvey, SurveyResult, run_survey
+from gimwatch.survey_report import write_survey
 
 __all__ = [
     "ChainSpec",
@@ -46,9 +48,12 @@ __all__ = [
     "InputError",
     "Robot",
     "RobotError",
+    "RobotFailure",
+    "RobotSurvey",
     "ScaledDiagonalRatio",
     "SceneError",
     "SimulationError",
+    "SurveyResult",
     "URDFError",
     "__version__",
     "analyze_configuration",
@@ -68,6 +73,8 @@ __all__ = [
     "pivot_ratio_backward",
     "pivot_ratio_forward",
     "random_configurations",
+    "run_survey",
     "udut_pivots",
     "write_chain_urdf",
+    "write_survey",
 ]
