@@ -31,6 +31,7 @@ __all__ = [
 CSV_COLUMNS = ("robot", "sample", *METRICS, "alpha_delta", *DOF_METRICS)
 SCATTER_PNG = "kappa_vs_delta.png"
 GRID_PNG = "kappa_vs_delta_per_robot.png"
+_EXTREME_COLUMNS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_max_dof", "lambda_min_dof")
 
 
 def _g(value: float, digits: int = 3) -> str:
@@ -173,7 +174,8 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
     lines += [_summary(result), "## κ, δ and αδ", "", readme_table(result)]
     lines += [
         "`*`: no joint with a fixed base, surveyed with a free-flyer base. With a floating "
-        "base the GIM mixes kg (translations) and kg·m² (rotations): κ and δ depend on units.",
+        "base the GIM mixes kg (translations) and kg·m² (rotations): κ and δ depend on units. "
+        "`—`: undefined, κ or δ is the same at every sample.",
         "",
         "## Pivot ratios (median / max)",
         "",
@@ -201,7 +203,7 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
         "|---|---|---|---|---|---:|",
     ]
     for r in result.robots:
-        cells = [f"{d} ({f:.0%})" for d, f in (r.extreme_dofs[k] for k in DOF_METRICS)]
+        cells = [f"{d} ({f:.0%})" for d, f in (r.extreme_dofs[k] for k in _EXTREME_COLUMNS)]
         lines.append(f"| {r.name} | {' | '.join(cells)} | {r.lambda_min_on_min_diagonal:.0%} |")
     lines += [
         "",

@@ -35,6 +35,14 @@ def test_survey_writes_report_json_csv_and_plots(capsys, tmp_path):
     report = (tmp_path / "report.md").read_text()
     assert "| chain_4 | 4 | fixed |" in report and "| cassie | load |" in report
     assert (tmp_path / "table.md").read_text() in report
+    # ur5: the wrist's last joint carries the smallest M_ii and lambda_min; the shoulder lambda_max
+    extreme = record["robots"][1]["extreme_dofs"]
+    assert extreme["lambda_min_dof"]["dof"] == "wrist_3_joint"
+    assert extreme["lambda_max_dof"]["dof"] == "shoulder_lift_joint"
+    header = "| robot | largest M_ii | smallest M_ii | λmax eigenvector | λmin eigenvector |"
+    (row,) = [line for line in report.splitlines() if line.startswith("| ur5 | shoulder")]
+    assert report.count(header) == 1
+    assert row.split(" | ")[3:5] == ["shoulder_lift_joint (100%)", "wrist_3_joint (100%)"]
 
 
 def test_survey_ctrl_c_writes_partial_results_and_exits_130(capsys, tmp_path, monkeypatch):
