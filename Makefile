@@ -20,7 +20,7 @@ demo: setup
 test: setup
 	$(PY) -W error -c "import gimwatch"
 	$(VENV)/bin/ruff check gimwatch tests
-	$(PY) -m pytest -n 2 --nbmake tests notebooks
+	$(PY) -m pytest -n 2 --nbmake tests $(wildcard notebooks/*.ipynb)
 
 # Regenerates benchmarks/survey/ and the README table "Does the diagonal ratio track κ on real robots?"
 .PHONY: survey
