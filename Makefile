@@ -22,6 +22,12 @@ test: setup
 	$(VENV)/bin/ruff check gimwatch tests
 	$(PY) -m pytest -n 2 --nbmake tests $(wildcard notebooks/*.ipynb)
 
+# Regenerates benchmarks/survey/ and the README table "Does the diagonal ratio track κ on real robots?"
+.PHONY: survey
+survey: setup
+	$(VENV)/bin/gimwatch survey all --samples 200 --seed 0 -o benchmarks/survey
+	$(PY) benchmarks/survey/update_readme.py
+
 lint: setup
 	$(VENV)/bin/ruff check gimwatch tests
 	$(VENV)/bin/ruff format --check gimwatch tests

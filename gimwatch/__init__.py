@@ -41,6 +41,8 @@ from gimwatch.robots import (
 from gimwatch.scene import Scene, load_scene, parse_scene
 from gimwatch.simresults import summarize, write_simulation
 from gimwatch.simulate import Simulation, Trajectory, run_scene
+from gimwatch.survey import RobotFailure, RobotSurvey, SurveyResult, run_survey
+from gimwatch.survey_report import write_survey
 from gimwatch.watch import Watch, estimator_quality
 
 __all__ = [
@@ -54,11 +56,14 @@ __all__ = [
     "InputError",
     "Robot",
     "RobotError",
+    "RobotFailure",
+    "RobotSurvey",
     "ScaledDiagonalRatio",
     "Scene",
     "SceneError",
     "Simulation",
     "SimulationError",
+    "SurveyResult",
     "Trajectory",
     "URDFError",
     "Watch",
@@ -85,8 +90,10 @@ __all__ = [
     "pivot_ratio_forward",
     "random_configurations",
     "run_scene",
+    "run_survey",
     "summarize",
     "udut_pivots",
     "write_chain_urdf",
     "write_simulation",
+    "write_survey",
 ]

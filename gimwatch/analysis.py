@@ -18,7 +18,7 @@ from gimwatch.errors import ConditioningError
 from gimwatch.inertia import gim
 from gimwatch.robots import Robot, as_configuration
 
-__all__ = ["GimAnalysis", "analyze_configuration"]
+__all__ = ["GimAnalysis", "analyze_configuration", "check_robot_gim"]
 
 
 @dataclass(frozen=True)
@@ -63,10 +63,13 @@ class GimAnalysis:
         return record
 
 
-def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAnalysis:
-    """Compute κ, δ, both pivot ratios and the spectrum of M(q)."""
-    q = as_configuration(robot, q)
-    M = gim(robot, q, data=data)
+def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
+    """Check M(q) of ``robot`` like :func:`~gimwatch.conditioning.check_gim`, naming joints.
+
+    Raises:
+        ConditioningError: A coordinate moves no mass (M singular), naming the URDF and the
+            coordinates; or M is not a valid GIM.
+    """
     massless = [robot.dof_names[k] for k in np.flatnonzero(~(np.diag(M) > 0))]
     if massless:
         raise ConditioningError(
@@ -75,7 +78,13 @@ def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAn
             f"({', '.join(massless[:4])}{', ...' if len(massless) > 4 else ''}); "
             "give the links they move an <inertial>"
         )
-    M = check_gim(M)
+    return check_gim(M)
+
+
+def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAnalysis:
+    """Compute κ, δ, both pivot ratios and the spectrum of M(q)."""
+    q = as_configuration(robot, q)
+    M = check_robot_gim(robot, gim(robot, q, data=data))
     values = eigenvalues(M)
     diag = np.diag(M)
     forward, backward = ldlt_pivots(M), udut_pivots(M)

@@ -31,9 +31,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _commands() -> dict[str, ModuleType]:
-    from gimwatch.cli import analyze, chain, crosscheck, demo, simulate
+    from gimwatch.cli import analyze, chain, crosscheck, demo, simulate, survey
 
-    return {module.NAME: module for module in (chain, analyze, crosscheck, simulate, demo)}
+    return {module.NAME: module for module in (chain, analyze, crosscheck, simulate, survey, demo)}
 
 
 def get_argument_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,361 @@
+"""Survey robots: does the diagonal ratio track κ, and what makes M(q) ill-conditioned?
+
+For each robot, sample 0 is the neutral configuration (Pinocchio's ``neutral``: zero angles,
+identity quaternions) and samples 1..K are drawn uniformly within the joint limits with
+:func:`~gimwatch.robots.random_configurations` (seeded, all drawn up front, then cut into
+chunks), so the result does not depend on how the chunks are scheduled. At every sample the
+GIM M(q) comes from Pinocchio's CRBA and gives:
+
+* κ₂ = λmax/λmin (Shah & Saha 2013, Eq. 6) and δ = max M_ii / min M_ii (Sec. 4);
+* the forward (LDLᵀ) and backward (UDUᵀ) pivot ratios (Sec. 4, Fig. 4);
+* the coordinates holding the largest and smallest diagonal entries, and the coordinate
+  with the largest weight |v_k| in the eigenvectors of λmin and λmax.
+
+Per robot the survey reports quantiles of κ, δ and the pivot ratios; the Pearson and
+Spearman correlations of log δ with log κ; the relative error |αδ - κ|/κ of the scaled
+diagonal ratio (Eq. 15) with α = κ/δ calibrated once at the neutral sample (the paper's
+t0), over samples 1..K; the worst configurations; and the coordinates that most often
+carry the extremes. Nothing here prints; :mod:`gimwatch.survey_report` writes the files.
+"""
+
+from __future__ import annotations
+
+import threading
+import warnings
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg
+import scipy.stats
+
+from gimwatch.analysis import check_robot_gim
+from gimwatch.conditioning import ldlt_pivots, udut_pivots
+from gimwatch.errors import ConditioningError, GimwatchError, InputError, RobotError
+from gimwatch.inertia import gim
+from gimwatch.robots import Robot, example_robot_names, load_robot, neutral_configuration
+from gimwatch.robots import random_configurations as _random_configurations
+from gimwatch.sweep import Task, run_sweep
+
+__all__ = [
+    "QUANTILES",
+    "RobotFailure",
+    "RobotSurvey",
+    "SurveyResult",
+    "WorstConfiguration",
+    "run_survey",
+    "sample_metrics",
+    "survey_robot_specs",
+]
+
+#: Quantile levels reported for κ, δ and the pivot ratios.
+QUANTILES = {"min": 0.0, "p05": 0.05, "median": 0.5, "p95": 0.95, "max": 1.0}
+#: Per-sample metrics, in the order of the CSV columns.
+METRICS = ("kappa", "delta", "pivot_forward", "pivot_backward", "lambda_min", "lambda_max")
+#: Per-sample coordinate indices (into ``Robot.dof_names``).
+DOF_METRICS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_min_dof", "lambda_max_dof")
+_NO_DOF = "has no degree of freedom"
+WORST_COUNT = 3
+
+
+def survey_robot_specs(specs: Sequence[str]) -> list[str]:
+    """Expand ``all`` into every example-robot-data name and drop repeats, keeping order."""
+    expanded: list[str] = []
+    for spec in specs:
+        names = example_robot_names() if spec == "all" else (spec,)
+        expanded += [name for name in names if name not in expanded]
+    return expanded
+
+
+def sample_metrics(robot: Robot, qs: np.ndarray, *, data=None) -> dict[str, np.ndarray]:
+    """κ, δ, pivot ratios, extreme eigenvalues and extreme coordinates at each row of ``qs``.
+
+    Returns:
+        Arrays of length ``len(qs)`` keyed by :data:`METRICS` (floats) and
+        :data:`DOF_METRICS` (int indices into ``robot.dof_names``).
+
+    Raises:
+        ConditioningError: M(q) is singular (a coordinate moves no mass) or not positive definite.
+    """
+    data = robot.new_data() if data is None else data
+    out = {key: np.empty(len(qs)) for key in METRICS}
+    out |= {key: np.empty(len(qs), dtype=np.int64) for key in DOF_METRICS}
+    for row, q in enumerate(qs):
+        M = check_robot_gim(robot, gim(robot, q, data=data))
+        diag = np.diag(M).copy()
+        values, vectors = scipy.linalg.eigh(M, check_finite=False)
+        if values[0] <= 0:
+            raise ConditioningError(
+                f"M(q) of {robot.name} is not positive definite (λmin = {values[0]:.3g})"
+            )
+        forward, backward = ldlt_pivots(M), udut_pivots(M)
+        out["kappa"][row] = values[-1] / values[0]
+        out["delta"][row] = diag.max() / diag.min()
+        out["pivot_forward"][row] = forward.max() / forward.min()
+        out["pivot_backward"][row] = backward.max() / backward.min()
+        out["lambda_min"][row], out["lambda_max"][row] = values[0], values[-1]
+        out["max_diagonal_dof"][row] = np.argmax(diag)
+        out["min_diagonal_dof"][row] = np.argmin(diag)
+        out["lambda_min_dof"][row] = np.argmax(np.abs(vectors[:, 0]))
+        out["lambda_max_dof"][row] = np.argmax(np.abs(vectors[:, -1]))
+    return out
+
+
+@lru_cache(maxsize=16)
+def _worker_robot(spec: str, floating: bool, thread: int):
+    robot = load_robot(spec, floating=floating)
+    return robot, robot.new_data()  # one Data per thread: Pinocchio's Data is not shared
+
+
+def _survey_chunk(spec: str, floating: bool, qs: np.ndarray) -> dict | str:
+    """Worker entry point: metrics of one chunk, or the error message of a bad robot."""
+    try:
+        robot, data = _worker_robot(spec, floating, threading.get_ident())
+        return sample_metrics(robot, qs, data=data)
+    except GimwatchError as exc:
+        return str(exc)
+
+
+@dataclass(frozen=True)
+class WorstConfiguration:
+    """One of the worst-conditioned samples of a robot."""
+
+    sample: int
+    kappa: float
+    delta: float
+    q: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class RobotFailure:
+    """A robot the survey could not use, with the stage (``load`` or ``gim``) and the reason."""
+
+    spec: str
+    stage: str
+    reason: str
+
+
+@dataclass(frozen=True)
+class RobotSurvey:
+    """The survey of one robot (see the module docstring for the definitions).
+
+    Attributes:
+        name: Robot name.
+        spec: Specification it was loaded from.
+        nv: Size of the GIM.
+        floating: Whether the base is a free flyer.
+        note: Why the base differs from the request (drones with no joint), else "".
+        dof_names: Coordinate names, the targets of the ``*_dof`` indices.
+        sample_index: Index of each surveyed sample (0 = neutral), ascending.
+        metrics: Per-sample values keyed by ``METRICS`` and ``DOF_METRICS``.
+        alpha: κ/δ at the neutral sample (NaN if that sample was not computed).
+        quantiles: metric -> quantile name -> value, for κ, δ and both pivot ratios.
+        pearson_log: Pearson correlation of log δ with log κ (NaN if either is constant).
+        spearman: Spearman rank correlation of δ with κ (NaN if either is constant).
+        alpha_delta_rel_error_median: median |αδ - κ|/κ over samples 1..K.
+        alpha_delta_rel_error_max: max |αδ - κ|/κ over samples 1..K.
+        worst: The samples with the largest κ, worst first.
+        extreme_dofs: ``DOF_METRICS`` key -> (most frequent coordinate, its frequency).
+        lambda_min_on_min_diagonal: Fraction of samples where λmin's eigenvector is
+            dominated by the coordinate that holds the smallest diagonal entry.
+    """
+
+    name: str
+    spec: str
+    nv: int
+    floating: bool
+    note: str
+    dof_names: tuple[str, ...]
+    sample_index: np.ndarray = field(repr=False)
+    metrics: dict[str, np.ndarray] = field(repr=False)
+    alpha: float
+    quantiles: dict[str, dict[str, float]]
+    pearson_log: float
+    spearman: float
+    alpha_delta_rel_error_median: float
+    alpha_delta_rel_error_max: float
+    worst: tuple[WorstConfiguration, ...]
+    extreme_dofs: dict[str, tuple[str, float]]
+    lambda_min_on_min_diagonal: float
+
+    @property
+    def samples(self) -> int:
+        """Number of samples surveyed."""
+        return int(self.sample_index.size)
+
+    def alpha_delta(self) -> np.ndarray:
+        """αδ at every sample (Shah & Saha 2013, Eq. 15)."""
+        return self.alpha * self.metrics["delta"]
+
+
+@dataclass(frozen=True)
+class SurveyResult:
+    """A survey: the robots surveyed, the robots that failed, and whether it was interrupted."""
+
+    robots: tuple[RobotSurvey, ...]
+    failures: tuple[RobotFailure, ...]
+    samples: int
+    seed: int
+    interrupted: bool = False
+    not_reached: tuple[str, ...] = ()
+
+
+def _correlations(delta: np.ndarray, kappa: np.ndarray) -> tuple[float, float]:
+    if delta.size < 3 or np.ptp(delta) == 0 or np.ptp(kappa) == 0:
+        return float("nan"), float("nan")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", scipy.stats.ConstantInputWarning)
+        pearson = scipy.stats.pearsonr(np.log(delta), np.log(kappa)).statistic
+        spearman = scipy.stats.spearmanr(delta, kappa).statistic
+    return float(pearson), float(spearman)
+
+
+def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> RobotSurvey:
+    kappa, delta = metrics["kappa"], metrics["delta"]
+    alpha = float(kappa[0] / delta[0]) if index[0] == 0 else float("nan")
+    later = index > 0
+    error = np.abs(alpha * delta[later] - kappa[later]) / kappa[later]
+    pearson, spearman = _correlations(delta, kappa)
+    quantiles = {
+        key: {name: float(np.quantile(metrics[key], level)) for name, level in QUANTILES.items()}
+        for key in ("kappa", "delta", "pivot_forward", "pivot_backward")
+    }
+    order = np.argsort(-kappa, kind="stable")[:WORST_COUNT]
+    worst = tuple(
+        WorstConfiguration(
+            sample=int(index[k]),
+            kappa=float(kappa[k]),
+            delta=float(delta[k]),
+            q=tuple(float(x) for x in qs[index[k]]),
+        )
+        for k in order
+    )
+    extreme = {}
+    for key in DOF_METRICS:
+        dof, count = Counter(metrics[key].tolist()).most_common(1)[0]
+        extreme[key] = (robot.dof_names[dof], count / index.size)
+    aligned = float(np.mean(metrics["lambda_min_dof"] == metrics["min_diagonal_dof"]))
+    return RobotSurvey(
+        name=robot.name,
+        spec=robot.spec,
+        nv=robot.nv,
+        floating=robot.floating,
+        note=note,
+        dof_names=robot.dof_names,
+        sample_index=index,
+        metrics=metrics,
+        alpha=alpha,
+        quantiles=quantiles,
+        pearson_log=pearson,
+        spearman=spearman,
+        alpha_delta_rel_error_median=float(np.median(error)) if error.size else float("nan"),
+        alpha_delta_rel_error_max=float(np.max(error)) if error.size else float("nan"),
+        worst=worst,
+        extreme_dofs=extreme,
+        lambda_min_on_min_diagonal=aligned,
+    )
+
+
+def _load(spec: str, floating: bool) -> tuple[Robot, str]:
+    try:
+        return load_robot(spec, floating=floating), ""
+    except RobotError as exc:
+        if floating or not exc.problem.startswith(_NO_DOF):
+            raise
+    note = "no joint with a fixed base: surveyed with a free-flyer base"
+    return load_robot(spec, floating=True), note
+
+
+def _worker_spec(spec: str) -> str:
+    """Specs as workers must see them: URDF paths made absolute (workers may run elsewhere)."""
+    path = Path(spec)
+    if spec.lower().endswith((".urdf", ".xml")) and path.exists():
+        return str(path.resolve())
+    return spec
+
+
+def run_survey(
+    specs: Sequence[str],
+    *,
+    samples: int = 200,
+    seed: int = 0,
+    floating: bool = False,
+    chunk_size: int = 50,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> SurveyResult:
+    """Survey robots at the neutral configuration plus ``samples`` random ones each.
+
+    Robots that cannot be loaded, or whose M(q) is singular, become :class:`RobotFailure`
+    records and the survey goes on. Ctrl-C returns what was finished (``interrupted=True``).
+
+    Args:
+        specs: Robot specifications; ``all`` means every example-robot-data robot.
+        samples: K, random configurations per robot (>= 1), besides the neutral one.
+        seed: Seed of :func:`~gimwatch.robots.random_configurations` (same for every robot).
+        floating: Give every robot a free-flyer base. Without it, robots with no joint
+            (drones) get one anyway and say so in ``note``.
+        chunk_size: Samples per task.
+        workers: Local processes (default: every core; 1 runs in this process).
+        scheduler: ``"local"`` or a Dask scheduler address to run the chunks on Dask.
+        progress: Called as ``progress(finished_chunks, total_chunks)`` after each chunk.
+    """
+    for name, value in (("samples", samples), ("chunk_size", chunk_size)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise InputError(name, "a positive integer", value)
+    failures: list[RobotFailure] = []
+    loaded: list[tuple[Robot, str, np.ndarray]] = []
+    for spec in survey_robot_specs(specs):
+        try:
+            robot, note = _load(spec, floating)
+        except GimwatchError as exc:
+            failures.append(RobotFailure(spec=spec, stage="load", reason=str(exc)))
+            continue
+        qs = np.vstack(
+            [neutral_configuration(robot), _random_configurations(robot, samples, seed=seed)]
+        )
+        loaded.append((robot, note, qs))
+    tasks, owners = [], []
+    for k, (robot, _, qs) in enumerate(loaded):
+        for start in range(0, len(qs), chunk_size):
+            chunk = qs[start : start + chunk_size]
+            tasks.append(Task(_survey_chunk, (_worker_spec(robot.spec), robot.floating, chunk)))
+            owners.append((k, start))
+    finished = 0
+
+    def chunk_done(_: int) -> None:
+        nonlocal finished
+        finished += 1
+        if progress is not None:
+            progress(finished, len(tasks))
+
+    outcome = run_sweep(tasks, workers=workers, scheduler=scheduler, progress=chunk_done)
+    by_robot: dict[int, list] = {k: [] for k in range(len(loaded))}
+    for i in sorted(outcome.results):  # task order: robot by robot, chunks ascending
+        k, start = owners[i]
+        by_robot[k].append((start, outcome.results[i]))
+    robots, not_reached = [], []
+    for k, (robot, note, qs) in enumerate(loaded):
+        parts = by_robot[k]
+        errors = [part for _, part in parts if isinstance(part, str)]
+        if errors:
+            failures.append(RobotFailure(spec=robot.spec, stage="gim", reason=errors[0]))
+            continue
+        if not parts:
+            not_reached.append(robot.spec)
+            continue
+        index = np.concatenate([np.arange(s, s + len(p["kappa"])) for s, p in parts])
+        metrics = {key: np.concatenate([p[key] for _, p in parts]) for key in parts[0][1]}
+        robots.append(_summarize(robot, note, index, metrics, qs))
+    return SurveyResult(
+        robots=tuple(robots),
+        failures=tuple(failures),
+        samples=samples,
+        seed=seed,
+        interrupted=outcome.interrupted,
+        not_reached=tuple(not_reached),
+    )

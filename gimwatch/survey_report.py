@@ -1,0 +1,313 @@
+"""Write a :class:`~gimwatch.survey.SurveyResult`: report.md, survey.json, survey.csv, PNG plots.
+
+Every file is written atomically (temporary name, then rename), so an interrupted or failed
+run never leaves half a file; an interrupted survey is written too, and says so.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import io
+import math
+import platform
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+
+from gimwatch._version import __version__
+from gimwatch.results import write_bytes_atomic, write_json_atomic, write_text_atomic
+from gimwatch.survey import DOF_METRICS, METRICS, RobotSurvey, SurveyResult
+
+__all__ = [
+    "plot_kappa_vs_delta",
+    "plot_kappa_vs_delta_grid",
+    "readme_table",
+    "survey_record",
+    "write_survey",
+]
+
+CSV_COLUMNS = ("robot", "sample", *METRICS, "alpha_delta", *DOF_METRICS)
+SCATTER_PNG = "kappa_vs_delta.png"
+GRID_PNG = "kappa_vs_delta_per_robot.png"
+_EXTREME_COLUMNS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_max_dof", "lambda_min_dof")
+
+
+def _g(value: float, digits: int = 3) -> str:
+    return "—" if value is None or not math.isfinite(value) else f"{value:.{digits}g}"
+
+
+def _f(value: float) -> str:
+    return "—" if not math.isfinite(value) else f"{value:.2f}"
+
+
+def _base(robot: RobotSurvey) -> str:
+    return ("floating" if robot.floating else "fixed") + ("*" if robot.note else "")
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _versions() -> dict[str, str]:
+    versions = {"gimwatch": __version__}
+    for package in ("pin", "example-robot-data-loaders", "numpy", "scipy"):
+        try:
+            versions[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            versions[package] = "?"
+    return versions
+
+
+def survey_record(result: SurveyResult, *, wall_time_s: float | None = None) -> dict:
+    """The JSON-ready summary: settings, versions, per-robot statistics, failures."""
+    robots = []
+    for r in result.robots:
+        robots.append(
+            {
+                "robot": r.name,
+                "spec": r.spec,
+                "nv": r.nv,
+                "floating": r.floating,
+                "note": r.note,
+                "samples": r.samples,
+                "alpha": r.alpha,
+                "quantiles": r.quantiles,
+                "pearson_log_delta_log_kappa": r.pearson_log,
+                "spearman_delta_kappa": r.spearman,
+                "alpha_delta_rel_error_median": r.alpha_delta_rel_error_median,
+                "alpha_delta_rel_error_max": r.alpha_delta_rel_error_max,
+                "extreme_dofs": {
+                    k: {"dof": d, "frequency": f} for k, (d, f) in r.extreme_dofs.items()
+                },
+                "lambda_min_on_min_diagonal": r.lambda_min_on_min_diagonal,
+                "worst": [
+                    {"sample": w.sample, "kappa": w.kappa, "delta": w.delta, "q": list(w.q)}
+                    for w in r.worst
+                ],
+            }
+        )
+    return {
+        "samples_per_robot": result.samples,
+        "seed": result.seed,
+        "calibration": "alpha = kappa/delta at sample 0, the neutral configuration",
+        "interrupted": result.interrupted,
+        "not_reached": list(result.not_reached),
+        "wall_time_s": wall_time_s,
+        "versions": _versions(),
+        "robots": robots,
+        "failures": [vars(f) for f in result.failures],
+    }
+
+
+def _csv_text(result: SurveyResult) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(CSV_COLUMNS)
+    for r in result.robots:
+        alpha_delta = r.alpha_delta()
+        for row, sample in enumerate(r.sample_index):
+            floats = [repr(float(r.metrics[key][row])) for key in METRICS]
+            dofs = [r.dof_names[r.metrics[key][row]] for key in DOF_METRICS]
+            writer.writerow([r.name, int(sample), *floats, repr(float(alpha_delta[row])), *dofs])
+    return buffer.getvalue()
+
+
+def readme_table(result: SurveyResult) -> str:
+    """Markdown table "Does the diagonal ratio track κ on real robots?", one row per robot."""
+    lines = [
+        "| robot | nv | base | κ median | κ max | δ median | Pearson log δ~log κ | Spearman δ~κ "
+        "| αδ rel. err. median | αδ rel. err. max | λmin eigenvector on |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|",
+    ]
+    for r in result.robots:
+        q_kappa, q_delta = r.quantiles["kappa"], r.quantiles["delta"]
+        dof, frequency = r.extreme_dofs["lambda_min_dof"]
+        lines.append(
+            f"| {r.name} | {r.nv} | {_base(r)} | {_g(q_kappa['median'])} | {_g(q_kappa['max'])} "
+            f"| {_g(q_delta['median'])} | {_f(r.pearson_log)} | {_f(r.spearman)} "
+            f"| {_g(r.alpha_delta_rel_error_median, 2)} | {_g(r.alpha_delta_rel_error_max, 2)} "
+            f"| {dof} ({frequency:.0%}) |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _summary(result: SurveyResult) -> str:
+    pearson = np.array([r.pearson_log for r in result.robots])
+    pearson = pearson[np.isfinite(pearson)]
+    error = np.array([r.alpha_delta_rel_error_median for r in result.robots])
+    error = error[np.isfinite(error)]
+    if pearson.size == 0:
+        return "No robot has enough varying samples for a correlation.\n"
+    return (
+        f"{len(result.robots)} robots surveyed, {len(result.failures)} failed. "
+        f"Pearson correlation of log δ with log κ: median {np.median(pearson):.2f} over "
+        f"{pearson.size} robots with a varying κ; r > 0.9 for {np.sum(pearson > 0.9)}, "
+        f"r < 0.5 for {np.sum(pearson < 0.5)}. Median relative error of αδ (α at the neutral "
+        f"configuration): median {np.median(error):.2g} over robots, worst "
+        f"{np.max(error):.2g}.\n"
+    )
+
+
+def _report(result: SurveyResult, wall_time_s: float | None) -> str:
+    versions = ", ".join(f"{k} {v}" for k, v in _versions().items())
+    wall = "" if wall_time_s is None else f", wall time {wall_time_s:.1f} s"
+    lines = [
+        "# Survey: does the diagonal ratio track κ on real robots?",
+        "",
+        f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}; {versions}; CPU {_cpu()}.",
+        f"{result.samples} random configurations per robot + the neutral one (sample 0), "
+        f"seed {result.seed}{wall}. α = κ/δ is calibrated at the neutral configuration; "
+        "αδ errors are over the random samples.",
+        "",
+    ]
+    if result.interrupted:
+        reached = ", ".join(result.not_reached) or "none"
+        lines += [f"**Interrupted**: partial results; robots not reached: {reached}.", ""]
+    lines += [_summary(result), "## κ, δ and αδ", "", readme_table(result)]
+    lines += [
+        "`*`: no joint with a fixed base, surveyed with a free-flyer base. With a floating "
+        "base the GIM mixes kg (translations) and kg·m² (rotations): κ and δ depend on units. "
+        "`—`: undefined, κ or δ is the same at every sample.",
+        "",
+        "## Pivot ratios (median / max)",
+        "",
+        "| robot | κ p05 | κ p95 | δ p05 | δ p95 | forward pivot ratio | backward pivot ratio |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in result.robots:
+        k, d = r.quantiles["kappa"], r.quantiles["delta"]
+        f, b = r.quantiles["pivot_forward"], r.quantiles["pivot_backward"]
+        lines.append(
+            f"| {r.name} | {_g(k['p05'])} | {_g(k['p95'])} | {_g(d['p05'])} | {_g(d['p95'])} "
+            f"| {_g(f['median'])} / {_g(f['max'])} | {_g(b['median'])} / {_g(b['max'])} |"
+        )
+    lines += [
+        "",
+        "## What makes each robot ill-conditioned",
+        "",
+        "Most frequent coordinate (share of samples) holding the largest and smallest diagonal "
+        "entry, and dominating the eigenvectors of λmax and λmin; the last column is the share "
+        "of samples where λmin's eigenvector lives on the coordinate with the smallest diagonal "
+        "entry (a light distal body or a short lever arm sets κ).",
+        "",
+        "| robot | largest M_ii | smallest M_ii | λmax eigenvector | λmin eigenvector "
+        "| λmin on smallest M_ii |",
+        "|---|---|---|---|---|---:|",
+    ]
+    for r in result.robots:
+        cells = [f"{d} ({f:.0%})" for d, f in (r.extreme_dofs[k] for k in _EXTREME_COLUMNS)]
+        lines.append(f"| {r.name} | {' | '.join(cells)} | {r.lambda_min_on_min_diagonal:.0%} |")
+    lines += [
+        "",
+        "## Worst configurations",
+        "",
+        "The samples with the largest κ (their q is in `survey.json`).",
+        "",
+        "| robot | sample | κ | δ |",
+        "|---|---:|---:|---:|",
+    ]
+    for r in result.robots:
+        for w in r.worst:
+            lines.append(f"| {r.name} | {w.sample} | {_g(w.kappa, 4)} | {_g(w.delta, 4)} |")
+    if result.failures:
+        lines += ["", "## Robots not surveyed", "", "| robot | stage | reason |", "|---|---|---|"]
+        lines += [f"| {f.spec} | {f.stage} | {f.reason} |" for f in result.failures]
+    lines += [
+        "",
+        "## Plots",
+        "",
+        f"![κ vs δ, all robots]({SCATTER_PNG})",
+        "",
+        f"![κ vs δ per robot]({GRID_PNG})",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _colors(count: int):
+    import matplotlib as mpl
+
+    cmap = mpl.colormaps["tab20"] if count <= 20 else mpl.colormaps["turbo"]
+    return [cmap(k / max(count - 1, 1)) if count > 20 else cmap(k) for k in range(count)]
+
+
+def plot_kappa_vs_delta(result: SurveyResult, ax=None):
+    """Log-log scatter of κ against δ, every robot in its own colour, with the bound κ >= δ."""
+    import matplotlib.pyplot as plt
+
+    ax = plt.gca() if ax is None else ax
+    for r, color in zip(result.robots, _colors(len(result.robots)), strict=True):
+        ax.scatter(r.metrics["delta"], r.metrics["kappa"], s=6, color=color, label=r.name)
+    limits = [
+        min([r.quantiles["delta"]["min"] for r in result.robots], default=1.0),
+        max([r.quantiles["kappa"]["max"] for r in result.robots], default=10.0),
+    ]
+    ax.plot(limits, limits, "k--", linewidth=0.8, label="κ = δ (lower bound)")
+    ax.set(xscale="log", yscale="log", xlabel="diagonal ratio δ", ylabel="condition number κ")
+    ax.legend(fontsize=6, ncol=2, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    return ax
+
+
+def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
+    """One log-log panel per robot: κ against δ, with the calibrated line κ = αδ."""
+    import matplotlib.pyplot as plt
+
+    count = max(len(result.robots), 1)
+    columns = min(6, count)
+    rows = math.ceil(count / columns)
+    fig = plt.figure(figsize=(2.3 * columns, 2.0 * rows)) if fig is None else fig
+    axes = fig.subplots(rows, columns, squeeze=False)
+    colors = _colors(len(result.robots))
+    for ax, r, color in zip(axes.flat, result.robots, colors, strict=False):
+        delta = r.metrics["delta"]
+        ax.scatter(delta, r.metrics["kappa"], s=4, color=color)
+        line = np.array([delta.min(), delta.max()])
+        if math.isfinite(r.alpha):
+            ax.plot(line, r.alpha * line, "k--", linewidth=0.7)
+        ax.set(xscale="log", yscale="log")
+        ax.set_title(f"{r.name} (r={_f(r.pearson_log)})", fontsize=7)
+        ax.tick_params(labelsize=5)
+    for ax in axes.flat[len(result.robots) :]:
+        ax.set_axis_off()
+    fig.supxlabel("δ")
+    fig.supylabel("κ  (dashed: αδ, α at the neutral configuration)")
+    fig.tight_layout()
+    return fig
+
+
+def _png(fig) -> bytes:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
+    return buffer.getvalue()
+
+
+def write_survey(
+    result: SurveyResult, output: str | Path, *, wall_time_s: float | None = None
+) -> Path:
+    """Write report.md, survey.json, survey.csv, table.md and two PNGs into ``output``.
+
+    Returns:
+        The path of report.md.
+    """
+    from matplotlib.figure import Figure  # no pyplot: leaves the user's backend alone
+
+    output = Path(output)
+    fig = Figure(figsize=(8, 6))
+    plot_kappa_vs_delta(result, ax=fig.subplots())
+    write_bytes_atomic(output / SCATTER_PNG, _png(fig))
+    count = max(len(result.robots), 1)
+    columns = min(6, count)
+    grid = Figure(figsize=(2.3 * columns, 2.0 * math.ceil(count / columns)))
+    write_bytes_atomic(output / GRID_PNG, _png(plot_kappa_vs_delta_grid(result, fig=grid)))
+    write_json_atomic(output / "survey.json", survey_record(result, wall_time_s=wall_time_s))
+    write_text_atomic(output / "survey.csv", _csv_text(result))
+    write_text_atomic(output / "table.md", readme_table(result))
+    return write_text_atomic(output / "report.md", _report(result, wall_time_s))

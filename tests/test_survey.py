@@ -1,0 +1,141 @@
+import numpy as np
+import pytest
+from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM, planar_rod_chain_gim
+
+from gimwatch.analysis import analyze_configuration
+from gimwatch.robots import load_robot, random_configurations
+from gimwatch.survey import DOF_METRICS, METRICS, run_survey, sample_metrics
+
+SPECS = ["chain:4", "ur5", "cassie", "bravo7_gripper", "hector"]
+
+
+@pytest.fixture(scope="module")
+def serial():
+    return run_survey(SPECS, samples=12, seed=3, chunk_size=5, workers=1)
+
+
+def _same(a, b):
+    assert [r.name for r in a.robots] == [r.name for r in b.robots]
+    assert a.failures == b.failures
+    for x, y in zip(a.robots, b.robots, strict=True):
+        np.testing.assert_array_equal(x.sample_index, y.sample_index)
+        for key in METRICS + DOF_METRICS:
+            np.testing.assert_array_equal(x.metrics[key], y.metrics[key], err_msg=f"{x.name} {key}")
+        assert x.alpha == y.alpha and x.worst == y.worst
+
+
+def test_chain_metrics_match_the_closed_form_rod_gim():
+    robot = load_robot("chain:4")
+    qs = random_configurations(robot, 6, seed=1)
+    metrics = sample_metrics(robot, qs)
+    for row, q in enumerate(qs):
+        M = planar_rod_chain_gim(q, 2.2, 1.0)
+        values, vectors = np.linalg.eigh(M)
+        assert metrics["kappa"][row] == pytest.approx(values[-1] / values[0], rel=1e-9)
+        assert metrics["delta"][row] == pytest.approx(np.diag(M).max() / np.diag(M).min())
+        assert metrics["lambda_min_dof"][row] == np.argmax(np.abs(vectors[:, 0]))
+        assert metrics["lambda_max_dof"][row] == np.argmax(np.abs(vectors[:, -1]))
+        assert metrics["min_diagonal_dof"][row] == np.argmin(np.diag(M))
+
+
+def test_metrics_agree_with_analyze_on_a_real_robot():
+    robot = load_robot("panda")
+    qs = random_configurations(robot, 4, seed=2)
+    metrics = sample_metrics(robot, qs)
+    for row, q in enumerate(qs):
+        ref = analyze_configuration(robot, q)
+        for key, value in [
+            ("kappa", ref.kappa),
+            ("delta", ref.diagonal_ratio),
+            ("pivot_forward", ref.pivot_ratio_forward),
+            ("pivot_backward", ref.pivot_ratio_backward),
+            ("lambda_min", ref.lambda_min),
+        ]:
+            assert metrics[key][row] == pytest.approx(value, rel=1e-9), key
+        assert robot.dof_names[metrics["max_diagonal_dof"][row]] == ref.max_diagonal_dof
+
+
+def test_paper_chain_is_calibrated_at_the_straight_neutral_configuration(serial):
+    chain = serial.robots[0]
+    assert chain.name == "chain_4" and chain.samples == 13
+    # Shah & Saha (2013), Eq. (7)-(8): kappa = 1074.44, delta = 64 for the straight chain
+    assert chain.metrics["kappa"][0] == pytest.approx(1074.44, abs=0.01)
+    assert chain.alpha == pytest.approx(1074.44 / 64, abs=1e-3)
+    assert chain.worst[0].sample == 0 and chain.worst[0].q == (0.0, 0.0, 0.0, 0.0)
+    assert chain.extreme_dofs["min_diagonal_dof"] == ("joint_4", 1.0)
+
+
+def test_statistics_recomputed_independently(serial):
+    for r in serial.robots:
+        kappa, delta = r.metrics["kappa"], r.metrics["delta"]
+        assert np.all(kappa >= delta * (1 - 1e-12))  # lambda_min <= M_ii <= lambda_max
+        assert r.quantiles["kappa"]["max"] == kappa.max()
+        assert r.quantiles["delta"]["median"] == pytest.approx(np.median(delta))
+        error = np.abs(kappa[0] / delta[0] * delta[1:] - kappa[1:]) / kappa[1:]
+        assert r.alpha_delta_rel_error_median == pytest.approx(np.median(error), rel=1e-12)
+        assert r.alpha_delta_rel_error_max == pytest.approx(error.max(), rel=1e-12)
+        if np.ptp(kappa) == 0:  # hector: a free-flyer alone, M is constant in the body frame
+            assert np.isnan(r.pearson_log) and np.isnan(r.spearman)
+            continue
+        assert r.pearson_log == pytest.approx(np.corrcoef(np.log(delta), np.log(kappa))[0, 1])
+        ranks = [np.argsort(np.argsort(x)) for x in (delta, kappa)]
+        assert r.spearman == pytest.approx(np.corrcoef(*ranks)[0, 1])
+
+
+def test_failures_are_reported_and_the_survey_goes_on(serial):
+    assert [r.name for r in serial.robots] == ["chain_4", "ur5", "hector"]
+    hector = serial.robots[2]
+    assert hector.floating and "free-flyer" in hector.note and hector.nv == 6
+    failures = {f.spec: (f.stage, f.reason) for f in serial.failures}
+    assert failures["cassie"] == (
+        "load",
+        "robot 'cassie': example-robot-data ships it only as SDF; gimwatch reads URDF",
+    )
+    stage, reason = failures["bravo7_gripper"]
+    assert stage == "gim" and "is singular" in reason and "bravo_finger1_joint" in reason
+
+
+def test_process_pool_gives_identical_results(serial):
+    _same(run_survey(SPECS, samples=12, seed=3, chunk_size=5, workers=2), serial)
+
+
+def test_dask_local_cluster_gives_identical_results(serial):
+    from distributed import LocalCluster  # the `dask` extra, also in the `test` extra
+
+    with LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
+        result = run_survey(
+            SPECS, samples=12, seed=3, chunk_size=5, scheduler=cluster.scheduler_address
+        )
+    _same(result, serial)
+
+
+def test_ctrl_c_keeps_the_finished_chunks():
+    def progress(finished, total):
+        assert total == 6  # two robots x 13 samples in chunks of 5
+        if finished == 2:
+            raise KeyboardInterrupt
+
+    result = run_survey(["ur5", "panda"], samples=12, chunk_size=5, workers=1, progress=progress)
+    assert result.interrupted and result.not_reached == ("panda",)
+    (ur5,) = result.robots
+    np.testing.assert_array_equal(ur5.sample_index, np.arange(10))
+    assert np.isfinite(ur5.alpha)
+
+
+def test_seed_changes_the_samples_but_not_the_neutral_one(serial):
+    other = run_survey(["ur5"], samples=12, seed=4, workers=1)
+    assert other.robots[0].metrics["kappa"][0] == serial.robots[1].metrics["kappa"][0]
+    assert not np.array_equal(other.robots[0].metrics["kappa"], serial.robots[1].metrics["kappa"])
+
+
+@pytest.mark.parametrize("name", EXAMPLE_ROBOTS)
+def test_every_example_robot_is_surveyed_or_explained(name):
+    result = run_survey([name], samples=2, workers=1)
+    if name in SINGULAR_GIM:
+        assert result.robots == () and result.failures[0].stage == "gim"
+        return
+    (robot,) = result.robots
+    assert robot.floating == (name in NO_DOF_WHEN_FIXED) and robot.samples == 3
+    assert np.all(np.isfinite(robot.metrics["kappa"]))
