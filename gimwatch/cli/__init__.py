@@ -30,9 +30,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _commands() -> dict[str, ModuleType]:
-    from gimwatch.cli import analyze, chain, demo
+    from gimwatch.cli import analyze, bench, chain, demo
 
-    return {module.NAME: module for module in (chain, analyze, demo)}
+    return {module.NAME: module for module in (chain, analyze, demo, bench)}
 
 
 def get_argument_parser() -> argparse.ArgumentParser:
