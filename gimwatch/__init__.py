@@ -29,6 +29,13 @@ from gimwatch.errors import (
     URDFError,
 )
 from gimwatch.inertia import gim, gim_diagonal
+from gimwatch.matrix_free import (
+    MatrixFreeKappa,
+    gim_inverse_operator,
+    gim_operator,
+    kappa_matrix_free,
+)
+from gimwatch.reference import PlanarChainReference, planar_reference
 from gimwatch.robots import (
     Robot,
     example_robot_names,
@@ -44,6 +51,8 @@ __all__ = [
     "GimwatchError",
     "IllConditionedWarning",
     "InputError",
+    "MatrixFreeKappa",
+    "PlanarChainReference",
     "Robot",
     "RobotError",
     "ScaledDiagonalRatio",
@@ -62,11 +71,15 @@ __all__ = [
     "generate_chain_urdf",
     "gim",
     "gim_diagonal",
+    "gim_inverse_operator",
+    "gim_operator",
+    "kappa_matrix_free",
     "ldlt_pivots",
     "load_robot",
     "neutral_configuration",
     "pivot_ratio_backward",
     "pivot_ratio_forward",
+    "planar_reference",
     "random_configurations",
     "udut_pivots",
     "write_chain_urdf",

@@ -128,7 +128,9 @@ class PlanarChainReference:
         with mpmath.workdps(self.dps):
             parts = self._parts(q, v)
             M = _t_transpose_a_t(parts["D"])
-            rhs = [t - b for t, b in zip(self._vector("tau", tau), _t_transpose(parts["bias"]))]
+            torques = self._vector("tau", tau)
+            bias = _t_transpose(parts["bias"])
+            rhs = [t - b for t, b in zip(torques, bias, strict=True)]
             a = mpmath.lu_solve(M, mpmath.matrix(rhs))
             return np.array([float(a[i]) for i in range(self.spec.n)])
 

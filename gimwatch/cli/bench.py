@@ -1,4 +1,4 @@
-"""Measure what accuracy costs in time: conditioning cost, estimators, q̈ accuracy (``gimwatch bench``)."""
+"""``gimwatch bench``: measure what accuracy costs in time (conditioning, estimators, q̈)."""
 
 from __future__ import annotations
 
