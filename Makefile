@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup demo test lint clean
+.PHONY: setup demo test lint bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -27,6 +27,11 @@ test: setup
 survey: setup
 	$(VENV)/bin/gimwatch survey all --samples 200 --seed 0 -o benchmarks/survey
 	$(PY) benchmarks/survey/update_readme.py
+
+# Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the README's
+# "What accuracy costs" section.
+bench: setup
+	$(VENV)/bin/gimwatch bench all -o benchmarks --readme README.md
 
 lint: setup
 	$(VENV)/bin/ruff check gimwatch tests

@@ -31,6 +31,13 @@ from gimwatch.errors import (
     URDFError,
 )
 from gimwatch.inertia import gim, gim_diagonal
+from gimwatch.matrix_free import (
+    MatrixFreeKappa,
+    gim_inverse_operator,
+    gim_operator,
+    kappa_matrix_free,
+)
+from gimwatch.reference import PlanarChainReference, planar_reference
 from gimwatch.robots import (
     Robot,
     example_robot_names,
@@ -54,6 +61,8 @@ __all__ = [
     "GimwatchError",
     "IllConditionedWarning",
     "InputError",
+    "MatrixFreeKappa",
+    "PlanarChainReference",
     "Robot",
     "RobotError",
     "RobotFailure",
@@ -81,6 +90,9 @@ __all__ = [
     "generate_chain_urdf",
     "gim",
     "gim_diagonal",
+    "gim_inverse_operator",
+    "gim_operator",
+    "kappa_matrix_free",
     "ldlt_pivots",
     "load_robot",
     "load_scene",
@@ -88,6 +100,7 @@ __all__ = [
     "parse_scene",
     "pivot_ratio_backward",
     "pivot_ratio_forward",
+    "planar_reference",
     "random_configurations",
     "run_scene",
     "run_survey",

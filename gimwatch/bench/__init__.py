@@ -1,1 +1,209 @@
-"""Benchmarks: what accuracy and watching cost in time (measured here, never in tests)."""
+"""What accuracy costs in time: the sections of ``gimwatch bench`` and the run that ties them.
+
+Each section is a module of this package with ``run(context) -> SectionResult``; the
+:data:`SECTIONS` registry names them, with the modules they need. A section whose module or
+dependencies are missing (the simulation sections before ``gimwatch.simulate`` lands) is
+reported as skipped by ``all`` and refused when asked for by name.
+
+Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder as
+soon as it finishes, so an interrupted run keeps what it measured; ``report.md`` is then
+written from the sections that finished, headed by versions, date, CPU and thread settings.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from gimwatch.errors import InputError
+
+__all__ = [
+    "SECTIONS",
+    "BenchContext",
+    "Section",
+    "SectionResult",
+    "Table",
+    "run_bench",
+    "section_status",
+]
+
+
+@dataclass(frozen=True)
+class Table:
+    """A result table with fixed columns (CSV header and JSON keys, in this order)."""
+
+    name: str
+    columns: tuple[str, ...]
+    rows: list[dict] = field(default_factory=list)
+
+    def add(self, **row: object) -> None:
+        """Append a row; its keys must be exactly the table's columns."""
+        if set(row) != set(self.columns):
+            missing, extra = set(self.columns) - set(row), set(row) - set(self.columns)
+            raise KeyError(f"table {self.name}: missing {sorted(missing)}, extra {sorted(extra)}")
+        self.rows.append({c: row[c] for c in self.columns})
+
+
+@dataclass
+class SectionResult:
+    """What one section measured: tables, figure files, and its Markdown text.
+
+    Attributes:
+        name: The section's registry name.
+        title: Its heading.
+        tables: The fixed-column tables (written as ``<name>.csv`` and ``<name>.json``).
+        figures: PNG files written into the output folder.
+        markdown: The section's report text (headline tables and conclusions).
+        headline: A shorter text for the README's "What accuracy costs" section.
+        summary: Key figures for ``summary.json`` (ratios, acceptance checks).
+    """
+
+    name: str
+    title: str
+    tables: list[Table] = field(default_factory=list)
+    figures: list[Path] = field(default_factory=list)
+    markdown: str = ""
+    headline: str = ""
+    summary: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class BenchContext:
+    """What a section gets: where to write, how big to go, where to say how far it is.
+
+    Attributes:
+        output: The output folder (exists).
+        quick: Tiny sizes: a smoke run for CI, numbers meaningless.
+        progress: Called with one line of progress (the CLI prints it on stderr).
+        seed: Seed of every random draw in the run.
+    """
+
+    output: Path
+    quick: bool = False
+    progress: Callable[[str], None] = lambda line: None
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Section:
+    """A registered section: its module and the modules it needs before it can run."""
+
+    name: str
+    title: str
+    module: str
+    needs: tuple[str, ...] = ()
+
+
+#: The sections in report order; ``all`` runs those whose status is None.
+SECTIONS: dict[str, Section] = {
+    s.name: s
+    for s in (
+        Section("conditioning", "Conditioning cost vs n", "gimwatch.bench.conditioning"),
+        Section("estimators", "Estimator quality vs cost", "gimwatch.bench.estimators"),
+        Section("accuracy", "Forward-dynamics accuracy vs κ", "gimwatch.bench.accuracy"),
+        Section(
+            "dynamics",
+            "Dynamics backends per step",
+            "gimwatch.bench.dynamics",
+            ("gimwatch.simulate",),
+        ),
+        Section(
+            "integrators",
+            "Work-precision of integrators (MuJoCo peer)",
+            "gimwatch.bench.integrators",
+            ("gimwatch.simulate",),
+        ),
+        Section(
+            "watch",
+            "Cost of the watch per step",
+            "gimwatch.bench.watch_section",
+            ("gimwatch.watch",),
+        ),
+        Section(
+            "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
+        ),
+    )
+}
+
+
+def _importable(module: str) -> bool:
+    try:
+        return importlib.util.find_spec(module) is not None
+    except ModuleNotFoundError:
+        return False
+
+
+def section_status(name: str) -> str | None:
+    """None when section ``name`` can run, else why not (one line)."""
+    section = SECTIONS[name]
+    missing = [m for m in (*section.needs, section.module) if not _importable(m)]
+    if missing:
+        return f"not available yet: needs {', '.join(missing)}"
+    return None
+
+
+def run_bench(
+    which: Sequence[str],
+    output: str | Path,
+    *,
+    quick: bool = False,
+    progress: Callable[[str], None] = lambda line: None,
+    readme: str | Path | None = None,
+    seed: int = 0,
+) -> Path:
+    """Run the named sections (or ``["all"]``), write tables, plots and ``report.md``.
+
+    Args:
+        which: Section names, or ``["all"]`` for every available section.
+        output: Output folder (created).
+        quick: Tiny sizes for a smoke run.
+        progress: Receives progress lines.
+        readme: A README whose "What accuracy costs" block (between the
+            ``<!-- bench:start -->`` and ``<!-- bench:end -->`` markers) is regenerated.
+        seed: Seed of every random draw.
+
+    Returns:
+        The path of ``report.md``.
+
+    Raises:
+        InputError: An unknown section, or one that is not available yet.
+    """
+    from gimwatch.bench.report import environment, update_readme, write_report, write_section
+
+    names = list(which)
+    skipped: dict[str, str] = {}
+    if names == ["all"]:
+        names = []
+        for name in SECTIONS:
+            reason = section_status(name)
+            if reason:
+                skipped[name] = reason
+            else:
+                names.append(name)
+    for name in names:
+        if name not in SECTIONS:
+            raise InputError("the bench section", f"one of {[*SECTIONS, 'all']}", name)
+        reason = section_status(name)
+        if reason:
+            raise InputError(f"bench section {name!r}", "available", reason)
+    output = Path(output)
+    output.mkdir(parents=True, exist_ok=True)
+    context = BenchContext(output=output, quick=quick, progress=progress, seed=seed)
+    progress("measuring the environment (BLAS threads)")
+    env = environment(quick=quick)
+    results: list[SectionResult] = []
+    try:
+        for name in names:
+            progress(f"section {name}")
+            module = importlib.import_module(SECTIONS[name].module)
+            result = module.run(context)
+            write_section(output, result)
+            results.append(result)
+    finally:  # an interrupted run still reports the sections it finished
+        report = write_report(output, env, results, skipped, quick=quick)
+    if readme is not None:
+        update_readme(Path(readme), env, results, output)
+    return report

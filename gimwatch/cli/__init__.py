@@ -31,9 +31,10 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _commands() -> dict[str, ModuleType]:
-    from gimwatch.cli import analyze, chain, crosscheck, demo, simulate, survey
+    from gimwatch.cli import analyze, bench, chain, crosscheck, demo, simulate, survey
 
-    return {module.NAME: module for module in (chain, analyze, crosscheck, simulate, survey, demo)}
+    modules = (chain, analyze, crosscheck, simulate, survey, bench, demo)
+    return {module.NAME: module for module in modules}
 
 
 def get_argument_parser() -> argparse.ArgumentParser:

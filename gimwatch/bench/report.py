@@ -1,0 +1,186 @@
+"""Write the benchmark's files: fixed-column CSV/JSON, ``report.md``, ``summary.json``, README.
+
+The report is headed by what makes numbers comparable: the versions of gimwatch, Pinocchio,
+NumPy, SciPy and mpmath, the date, the CPU model and the BLAS thread settings, plus the
+measured cost of multi-threaded BLAS on a 100 x 100 ``eigvalsh`` (the reason benchmarks pin
+BLAS to one thread).
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import io
+import platform
+import re
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+
+from gimwatch._version import __version__
+from gimwatch.bench import SectionResult, Table
+from gimwatch.bench.timing import blas_thread_ratio, cpu_model, thread_settings
+from gimwatch.errors import InputError
+from gimwatch.results import write_json_atomic, write_text_atomic
+
+__all__ = [
+    "environment",
+    "markdown_table",
+    "update_readme",
+    "write_report",
+    "write_section",
+    "write_table",
+]
+
+README_START, README_END = "<!-- bench:start -->", "<!-- bench:end -->"
+
+
+def _version(package: str) -> str:
+    try:
+        return version(package)
+    except PackageNotFoundError:
+        return "not installed"
+
+
+def environment(*, quick: bool = False) -> dict:
+    """Versions, date, CPU, thread settings and the measured BLAS-threads slowdown."""
+    import numpy
+    import pinocchio
+    import scipy
+
+    return {
+        "gimwatch": __version__,
+        "pinocchio": pinocchio.__version__,
+        "numpy": numpy.__version__,
+        "scipy": scipy.__version__,
+        "mpmath": _version("mpmath"),
+        "python": platform.python_version(),
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "cpu": cpu_model(),
+        "threads": thread_settings(),
+        "blas_threads": blas_thread_ratio(100, quick=quick),
+        "quick": quick,
+    }
+
+
+def _csv_text(table: Table) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(table.columns), lineterminator="\n")
+    writer.writeheader()
+    for row in table.rows:
+        writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in row.items()})
+    return buffer.getvalue()
+
+
+def write_table(output: Path, table: Table) -> tuple[Path, Path]:
+    """Write ``<name>.csv`` and ``<name>.json`` (``{"columns": [...], "rows": [...]}``)."""
+    csv_path = write_text_atomic(output / f"{table.name}.csv", _csv_text(table))
+    json_path = write_json_atomic(
+        output / f"{table.name}.json", {"columns": list(table.columns), "rows": table.rows}
+    )
+    return csv_path, json_path
+
+
+def write_section(output: Path, result: SectionResult) -> None:
+    """Write a finished section's tables (its figures are written by the section itself)."""
+    for table in result.tables:
+        write_table(output, table)
+
+
+def _header(env: dict) -> list[str]:
+    blas = env["blas_threads"]
+    lines = [
+        f"gimwatch {env['gimwatch']} · Pinocchio {env['pinocchio']} · NumPy {env['numpy']} · "
+        f"SciPy {env['scipy']} · mpmath {env['mpmath']} · Python {env['python']}",
+        "",
+        f"- date: {env['date']}",
+        f"- CPU: {env['cpu']}",
+        f"- thread settings during the run: {env['threads']} (BLAS pinned to one thread)",
+        f"- why: a {blas['n']}x{blas['n']} `eigvalsh` takes {blas['one_thread_s'] * 1e3:.3g} ms "
+        f"on one BLAS thread and {blas['all_threads_s'] * 1e3:.3g} ms on {blas['threads_all']} "
+        f"({blas['ratio']:.3g}x) in this run",
+        "- method: warm-up calls, then 7 timed rounds (each at least 20 ms of repeated calls);"
+        " medians per call; every ratio between medians of this run",
+    ]
+    if env.get("quick"):
+        lines.append("- **quick run**: tiny sizes for a smoke test; the numbers mean nothing")
+    return lines
+
+
+def write_report(
+    output: Path,
+    env: dict,
+    results: list[SectionResult],
+    skipped: dict[str, str],
+    *,
+    quick: bool = False,
+) -> Path:
+    """Write ``report.md`` and ``summary.json`` for the sections that finished."""
+    lines = ["# gimwatch bench: what accuracy costs in time", "", *_header(env), ""]
+    for result in results:
+        lines += [f"## {result.title}", "", result.markdown.strip(), ""]
+        lines += [f"![{f.stem}]({f.name})" for f in result.figures] + [""]
+    if skipped:
+        lines += ["## Not run", ""]
+        lines += [f"- `{name}`: {reason}" for name, reason in skipped.items()] + [""]
+    summary = {
+        "environment": env,
+        "sections": {r.name: r.summary for r in results},
+        "skipped": skipped,
+    }
+    write_json_atomic(output / "summary.json", summary)
+    return write_text_atomic(output / "report.md", "\n".join(lines).rstrip() + "\n")
+
+
+def update_readme(readme: Path, env: dict, results: list[SectionResult], output: Path) -> Path:
+    """Replace the block between the bench markers in ``readme`` with the headlines.
+
+    Raises:
+        InputError: The README lacks the ``<!-- bench:start -->``/``<!-- bench:end -->`` markers.
+    """
+    text = readme.read_text(encoding="utf-8")
+    pattern = re.compile(re.escape(README_START) + r".*?" + re.escape(README_END), re.DOTALL)
+    if not pattern.search(text):
+        raise InputError(
+            f"{readme}", f"a file with {README_START} and {README_END} markers", "no markers"
+        )
+    try:
+        prefix = output.resolve().relative_to(readme.resolve().parent).as_posix() + "/"
+    except ValueError:
+        prefix = output.resolve().as_posix() + "/"
+    blas = env["blas_threads"]
+    body = [
+        README_START,
+        f"Measured by `make bench` ({env['date']}; {env['cpu']}; Pinocchio {env['pinocchio']}, "
+        f"NumPy {env['numpy']}, SciPy {env['scipy']}; BLAS on one thread — on "
+        f"{blas['threads_all']} threads a {blas['n']}x{blas['n']} `eigvalsh` was "
+        f"{blas['ratio']:.3g}x slower in the same run). Full report: "
+        f"[`{prefix}report.md`]({prefix}report.md).",
+        "",
+    ]
+    for result in results:
+        body += [f"### {result.title}", "", result.headline.strip(), ""]
+        body += [f"![{f.stem}]({prefix}{f.name})" for f in result.figures[:1]] + [""]
+    body.append(README_END)
+    new = pattern.sub(lambda _: "\n".join(body), text)
+    return write_text_atomic(readme, new)
+
+
+def markdown_table(rows: list[dict], columns: dict[str, str]) -> str:
+    """A Markdown table of ``rows``; ``columns`` maps a row key to its header.
+
+    Floats are printed with 3 significant digits (4 for values near 1), None as "—".
+    """
+
+    def cell(value: object) -> str:
+        if value is None:
+            return "—"
+        if isinstance(value, float):
+            return f"{value:.3g}"
+        return str(value)
+
+    lines = [
+        "| " + " | ".join(columns.values()) + " |",
+        "|" + "---|" * len(columns),
+    ]
+    lines += ["| " + " | ".join(cell(row.get(k)) for k in columns) + " |" for row in rows]
+    return "\n".join(lines)

@@ -1,0 +1,48 @@
+"""``gimwatch bench``: measure what accuracy costs in time (conditioning, estimators, q̈)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from gimwatch.bench import SECTIONS, run_bench
+
+NAME = "bench"
+HELP = "what accuracy costs in time: tables, plots and a Markdown report"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declare the subcommand's arguments."""
+    parser.add_argument(
+        "which",
+        nargs="*",
+        default=["all"],
+        metavar="SECTION",
+        help=f"sections to run: {', '.join(SECTIONS)} or all (default: all)",
+    )
+    parser.add_argument("-o", "--output", default="benchmarks", help="output folder")
+    parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run")
+    parser.add_argument("--seed", type=int, default=0, help="seed of every random draw")
+    parser.add_argument(
+        "--readme", default=None, help="regenerate this README's 'What accuracy costs' block"
+    )
+
+
+def _progress(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the sections and print the report."""
+    which = ["all"] if "all" in args.which else args.which
+    report = run_bench(
+        which,
+        args.output,
+        quick=args.quick,
+        progress=_progress,
+        readme=args.readme,
+        seed=args.seed,
+    )
+    print(report.read_text())
+    print(f"wrote {report}", file=sys.stderr)
+    return 0

@@ -1,0 +1,97 @@
+import csv
+import json
+
+import pytest
+
+from gimwatch.bench import SECTIONS, Table, run_bench, section_status
+from gimwatch.bench.report import README_END, README_START, update_readme
+from gimwatch.bench.timing import time_call
+from gimwatch.cli import main
+from gimwatch.errors import InputError
+
+RUNNABLE = [name for name in SECTIONS if section_status(name) is None]
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
+    code = main(["bench", "all", "--quick", "-o", str(out)])
+    return code, out
+
+
+def test_quick_run_writes_every_file(quick_run):
+    code, out = quick_run
+    assert code == 0
+    assert {"conditioning", "estimators", "accuracy"} <= set(RUNNABLE)
+    for name in ("conditioning", "estimators", "accuracy"):
+        rows = list(csv.DictReader((out / f"{name}.csv").open()))
+        module = __import__(f"gimwatch.bench.{name}", fromlist=["COLUMNS"])
+        assert tuple(rows[0]) == module.COLUMNS
+        record = json.loads((out / f"{name}.json").read_text())
+        assert record["columns"] == list(module.COLUMNS) and len(record["rows"]) == len(rows)
+    for png in ("conditioning_cost.png", "estimators_pareto.png", "accuracy_vs_kappa.png"):
+        assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    report = (out / "report.md").read_text()
+    for needle in ("Pinocchio", "NumPy", "SciPy", "CPU:", "date:", "BLAS", "quick run"):
+        assert needle in report
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["environment"]["blas_threads"]["ratio"] > 0
+    for name, reason in summary["skipped"].items():
+        assert name not in RUNNABLE and reason.startswith("not available yet")
+
+
+def test_quick_run_measures_what_it_claims(quick_run):
+    _, out = quick_run
+    rows = list(csv.DictReader((out / "conditioning.csv").open()))
+    exact = [r for r in rows if r["method"] == "kappa_crba_eigvalsh"]
+    assert all(float(r["rel_error"]) == 0 for r in exact)
+    for r in rows:  # δ is a lower bound of κ; Lanczos at 1e-10 finds κ
+        if r["method"].startswith("delta"):
+            assert float(r["ratio_to_kappa"]) <= 1
+        if r["method"] == "kappa_lanczos_1e-10":
+            assert float(r["rel_error"]) < 1e-6
+    accuracy = list(csv.DictReader((out / "accuracy.csv").open()))
+    assert all(float(r["rel_error"]) < 1e-10 for r in accuracy)
+
+
+def test_unknown_section_is_one_line_exit_2(capsys):
+    assert main(["bench", "nonsense", "--quick"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nonsense" in err[0] and "conditioning" in err[0]
+
+
+def test_unavailable_section_is_refused_by_name(tmp_path):
+    missing = [name for name in SECTIONS if section_status(name) is not None]
+    if not missing:  # every section has landed: nothing left to refuse
+        assert RUNNABLE == list(SECTIONS)
+        return
+    with pytest.raises(InputError, match=rf"^bench section '{missing[0]}' must be available"):
+        run_bench([missing[0]], tmp_path, quick=True)
+
+
+def test_table_rejects_rows_without_its_columns():
+    table = Table("t", ("a", "b"))
+    table.add(b=2, a=1)
+    assert table.rows == [{"a": 1, "b": 2}]
+    with pytest.raises(KeyError, match="missing"):
+        table.add(a=1)
+
+
+def test_time_call_counts_calls():
+    calls = []
+    timing = time_call(lambda: calls.append(1), warmup=2, repeats=3, min_round_s=0.0)
+    assert timing.number == 1 and len(calls) == 2 + 1 + 3
+    assert timing.median_s >= timing.min_s >= 0
+
+
+def test_readme_block_is_replaced_between_markers(tmp_path, quick_run):
+    _, out = quick_run
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# x\n\n{README_START}\nold\n{README_END}\n\nafter\n")
+    env = json.loads((out / "summary.json").read_text())["environment"]
+    update_readme(readme, env, [], out)
+    text = readme.read_text()
+    assert "old" not in text and "after" in text and "make bench" in text
+    readme.write_text("no markers")
+    with pytest.raises(InputError, match="markers"):
+        update_readme(readme, env, [], out)
