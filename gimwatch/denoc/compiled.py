@@ -83,7 +83,9 @@ def kinematics(q, parent, joint_type, axis, origin_rotation, origin_position):
             for r in range(3):
                 for c in range(3):
                     rotation[i, r, c] = (
-                        frame[r, 0] * turn[0, c] + frame[r, 1] * turn[1, c] + frame[r, 2] * turn[2, c]
+                        frame[r, 0] * turn[0, c]
+                        + frame[r, 1] * turn[1, c]
+                        + frame[r, 2] * turn[2, c]
                     )
         else:
             rotation[i] = frame
@@ -131,7 +133,7 @@ def body_mass_matrices(rotation, mass, com, inertia):
 
 @njit(cache=True)
 def _add_shift_congruence(target, x, r, scratch):
-    """target += A_ijᵀ X A_ij, with A_ij = [[1, 0], [-r̃, 1]] (r = O_i - O_j); X symmetric.
+    """Target += A_ijᵀ X A_ij, with A_ij = [[1, 0], [-r̃, 1]] (r = O_i - O_j); X symmetric.
 
     Blockwise, with X = [[a, b], [bᵀ, d]]: the top-right block becomes b + r̃ d, the top-left
     a + r̃ bᵀ - (b + r̃ d) r̃ and the bottom-left its transpose; d is unchanged.
@@ -176,7 +178,7 @@ def _p_dot(joint_type, e, vector6):
 
 @njit(cache=True)
 def composite_diagonal(parent, joint_type, origin, e, body_mass):
-    """diag M: p_iᵀ M̃_i p_i with the composite mass matrices of Eq. (12), O(n)."""
+    """Diag M: p_iᵀ M̃_i p_i with the composite mass matrices of Eq. (12), O(n)."""
     n = parent.shape[0]
     composite = body_mass.copy()
     diag = np.empty(n)
@@ -187,7 +189,8 @@ def composite_diagonal(parent, joint_type, origin, e, body_mass):
         k = 0 if joint_type[i] == 0 else 3
         for a in range(6):
             column[a] = (
-                composite[i, a, k] * e[i, 0] + composite[i, a, k + 1] * e[i, 1]
+                composite[i, a, k] * e[i, 0]
+                + composite[i, a, k + 1] * e[i, 1]
                 + composite[i, a, k + 2] * e[i, 2]
             )
         diag[i] = _p_dot(joint_type[i], e[i], column)
@@ -200,8 +203,9 @@ def composite_diagonal(parent, joint_type, origin, e, body_mass):
 
 
 @njit(cache=True)
-def inverse_dynamics(parent, joint_type, origin, e, offset, rotation, mass, inertia, qd, qdd,
-                     gravity):
+def inverse_dynamics(
+    parent, joint_type, origin, e, offset, rotation, mass, inertia, qd, qdd, gravity
+):
     """τ = M(q) q̈ + C(q, q̇) q̇ - g(q): Newton–Euler about the joint origins, O(n).
 
     Classical accelerations at O_i: ω̇_i = ω̇_j + e_i q̈_i + ω_j × e_i q̇_i (revolute) and
@@ -260,8 +264,12 @@ def inverse_dynamics(parent, joint_type, origin, e, offset, rotation, mass, iner
             ic_alpha[k] = 0.0
             ic_omega[k] = 0.0
             for m in range(3):
-                local_a = inertia[i, 0, m] * t1[0] + inertia[i, 1, m] * t1[1] + inertia[i, 2, m] * t1[2]
-                local_w = inertia[i, 0, m] * t2[0] + inertia[i, 1, m] * t2[1] + inertia[i, 2, m] * t2[2]
+                local_a = (
+                    inertia[i, 0, m] * t1[0] + inertia[i, 1, m] * t1[1] + inertia[i, 2, m] * t1[2]
+                )
+                local_w = (
+                    inertia[i, 0, m] * t2[0] + inertia[i, 1, m] * t2[1] + inertia[i, 2, m] * t2[2]
+                )
                 ic_alpha[k] += rot[k, m] * local_a
                 ic_omega[k] += rot[k, m] * local_w
         # n_O = I_c α + ω × I_c ω + d × f
@@ -302,7 +310,8 @@ def articulated_factor(parent, joint_type, origin, e, body_mass):
         k = 0 if joint_type[i] == 0 else 3
         for a in range(6):
             u_vectors[i, a] = (
-                articulated[i, a, k] * e[i, 0] + articulated[i, a, k + 1] * e[i, 1]
+                articulated[i, a, k] * e[i, 0]
+                + articulated[i, a, k + 1] * e[i, 1]
                 + articulated[i, a, k + 2] * e[i, 2]
             )
         pivot = _p_dot(joint_type[i], e[i], u_vectors[i])
@@ -320,7 +329,7 @@ def articulated_factor(parent, joint_type, origin, e, body_mass):
 
 @njit(cache=True, error_model="numpy")
 def articulated_solve(parent, joint_type, origin, e, u_vectors, pivots, tau):
-    """x = M⁻¹ τ from the articulated factor: one backward and one forward sweep, O(n)."""
+    """X = M⁻¹ τ from the articulated factor: one backward and one forward sweep, O(n)."""
     n = parent.shape[0]
     bias = np.zeros((n, 6))
     rhs = np.empty(n)

@@ -42,8 +42,12 @@ class LinearTimeModel:
 
     def __init__(self, tree: BodyTree) -> None:
         if tree.floating:
-            raise InputError("the body tree", "fixed-base for the O(n) compiled path",
-                             "a floating base", hint="use DenocModel for floating bases")
+            raise InputError(
+                "the body tree",
+                "fixed-base for the O(n) compiled path",
+                "a floating base",
+                hint="use DenocModel for floating bases",
+            )
         self.tree = tree
         # The compiled kernels leave out the fixed root (body 0): parent -1 means the root.
         self._parent = np.ascontiguousarray(tree.parent[1:] - 1, dtype=np.int64)
@@ -90,20 +94,29 @@ class ConfigurationState:
         )
 
     def diagonal(self) -> np.ndarray:
-        """diag M(q) = p_iᵀ M̃_i p_i (Shah & Saha 2013, Eqs. 11–12), O(n)."""
+        """Diag M(q) = p_iᵀ M̃_i p_i (Shah & Saha 2013, Eqs. 11–12), O(n)."""
         m = self.model
         return compiled.composite_diagonal(
             m._parent, m._joint_type, self.origin, self.axis_world, self.body_mass
         )
 
-    def inverse_dynamics(self, v: npt.ArrayLike, a: npt.ArrayLike, *,
-                         gravity: npt.ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
+    def inverse_dynamics(
+        self, v: npt.ArrayLike, a: npt.ArrayLike, *, gravity: npt.ArrayLike = (0.0, 0.0, -9.81)
+    ) -> np.ndarray:
         """τ = M(q) a + C(q, v) v - g(q), O(n) Newton–Euler about the joint origins."""
         m = self.model
         return compiled.inverse_dynamics(
-            m._parent, m._joint_type, self.origin, self.axis_world, self.com_offset,
-            self.rotation, m._mass, m._inertia, np.asarray(v, dtype=float),
-            np.asarray(a, dtype=float), np.asarray(gravity, dtype=float),
+            m._parent,
+            m._joint_type,
+            self.origin,
+            self.axis_world,
+            self.com_offset,
+            self.rotation,
+            m._mass,
+            m._inertia,
+            np.asarray(v, dtype=float),
+            np.asarray(a, dtype=float),
+            np.asarray(gravity, dtype=float),
         )
 
     def matvec(self, x: npt.ArrayLike) -> np.ndarray:
@@ -132,12 +145,18 @@ class ConfigurationState:
                 "(a joint that moves no mass?)"
             )
         return compiled.articulated_solve(
-            m._parent, m._joint_type, self.origin, self.axis_world, u_vectors, pivots,
+            m._parent,
+            m._joint_type,
+            self.origin,
+            self.axis_world,
+            u_vectors,
+            pivots,
             np.asarray(tau, dtype=float),
         )
 
-    def forward_dynamics(self, v: npt.ArrayLike, tau: npt.ArrayLike, *,
-                         gravity: npt.ArrayLike = (0.0, 0.0, -9.81)) -> np.ndarray:
+    def forward_dynamics(
+        self, v: npt.ArrayLike, tau: npt.ArrayLike, *, gravity: npt.ArrayLike = (0.0, 0.0, -9.81)
+    ) -> np.ndarray:
         """q̈ = M⁻¹ (τ - bias), bias = C v - g from inverse dynamics at q̈ = 0; O(n)."""
         bias = self.inverse_dynamics(v, np.zeros(self.model.nv), gravity=gravity)
         return self.solve(np.asarray(tau, dtype=float) - bias)
@@ -202,7 +221,10 @@ def _largest_ritz_value(apply, start: np.ndarray, *, rtol: float, max_steps: int
         exhausted = beta <= 1e-14 * max(abs(a) for a in alphas) or k == steps - 1
         if k % 10 == 9 or exhausted:
             theta = scipy.linalg.eigh_tridiagonal(
-                np.array(alphas), np.array(betas), eigvals_only=True, select="i",
+                np.array(alphas),
+                np.array(betas),
+                eigvals_only=True,
+                select="i",
                 select_range=(k, k),
             )[0]
             change = abs(theta - previous) / abs(theta)
@@ -214,8 +236,9 @@ def _largest_ritz_value(apply, start: np.ndarray, *, rtol: float, max_steps: int
     raise AssertionError("unreachable")  # the loop returns at its last step
 
 
-def matrix_free_kappa(state: ConfigurationState, *, seed: int = 0, rtol: float = 1e-10,
-                      max_steps: int = 3000) -> MatrixFreeKappa:
+def matrix_free_kappa(
+    state: ConfigurationState, *, seed: int = 0, rtol: float = 1e-10, max_steps: int = 3000
+) -> MatrixFreeKappa:
     """κ₂ of M(q) from its extreme eigenvalues with O(n) operators only.
 
     λmin comes from the largest eigenvalue of M⁻¹ applied by the articulated-body

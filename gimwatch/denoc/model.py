@@ -143,8 +143,9 @@ class DenocModel:
         out[self._v_index] = x
         return out
 
-    def energy(self, q: npt.ArrayLike, v: npt.ArrayLike, *,
-               gravity: npt.ArrayLike = _GRAVITY) -> tuple[float, float]:
+    def energy(
+        self, q: npt.ArrayLike, v: npt.ArrayLike, *, gravity: npt.ArrayLike = _GRAVITY
+    ) -> tuple[float, float]:
         """(kinetic ½ vᵀ M v, gravity potential -Σ m_i g·c_i) in J; fixed base only, O(n)."""
         state = self.state(q)
         velocity = self.to_internal("v", v)
@@ -219,7 +220,8 @@ class DenocModel:
         """τ = M(q) a + h(q, v) by the DeNOC recursions (Saha's τ = Nᵀ w), N·m or N."""
         if self.linear is not None:
             tau = self.state(q).inverse_dynamics(
-                self.to_internal("v", v), self.to_internal("a", a),
+                self.to_internal("v", v),
+                self.to_internal("a", a),
                 gravity=_vector("gravity", gravity, 3),
             )
             return self.to_public(tau)
@@ -243,7 +245,8 @@ class DenocModel:
             state = self.state(q)
             self._check_pivots(state.pivots())
             qdd = state.forward_dynamics(
-                self.to_internal("v", v), self.to_internal("tau", tau),
+                self.to_internal("v", v),
+                self.to_internal("tau", tau),
                 gravity=_vector("gravity", gravity, 3),
             )
             return self.to_public(qdd)
