@@ -90,8 +90,14 @@ def _assert_passed(result):
 
 def test_denoc_sources_import_no_pinocchio():
     allowed = {
-        "numpy", "numpy.typing", "scipy.linalg", "numba", "yourdfpy", "gimwatch.errors",
-        "gimwatch.urdf", "gimwatch.chains",
+        "numpy",
+        "numpy.typing",
+        "scipy.linalg",
+        "numba",
+        "yourdfpy",
+        "gimwatch.errors",
+        "gimwatch.urdf",
+        "gimwatch.chains",
     }
     for path in sorted(DENOC_DIR.glob("*.py")):
         tree = ast.parse(path.read_text())

@@ -115,11 +115,12 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--q and --random", "used one at a time", "both")
     if args.random is not None and args.random > MAX_RANDOM:
         raise InputError("--random", f"at most {MAX_RANDOM}", args.random)
-    if args.metrics is not None and args.backend == "crba":
-        raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
     chain = parse_chain_spec(args.robot)
-    large = chain is not None and chain.n + 6 * args.floating > DATA_NV_LIMIT
-    if args.backend == "denoc" or (args.backend == "auto" and large):
+    large = chain is not None and not args.floating and chain.n > DATA_NV_LIMIT
+    linear = args.backend == "denoc" or (args.backend == "auto" and large)
+    if args.metrics is not None and not linear:
+        raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
+    if linear:
         results = _run_linear(args, chain, announce=args.backend == "auto")
     else:
         robot = load_robot(args.robot, floating=args.floating, max_nv=DATA_NV_LIMIT)
