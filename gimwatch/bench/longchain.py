@@ -40,15 +40,17 @@ _KAPPA_SIZES = (100, 500, 1_000, 2_000, 3_000, 4_000)
 _QUICK = {"step": (10, 50), "analyze": ((50, "all"),), "kappa": (20, 50)}
 
 _PROBE = """
-import contextlib, io, json, resource, sys, time
+import contextlib, io, json, sys, time
 start = time.perf_counter()
 from gimwatch.cli import main
 with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
     code = main(sys.argv[1:])
-print(json.dumps({"code": code, "wall_s": time.perf_counter() - start,
-                  "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+wall = time.perf_counter() - start
+# VmHWM, not ru_maxrss: Linux keeps ru_maxrss across exec, so it would report the parent's peak
+with open("/proc/self/status") as status:
+    peak_kb = next(int(line.split()[1]) for line in status if line.startswith("VmHWM:"))
+print(json.dumps({"code": code, "wall_s": wall, "peak_rss_mb": peak_kb / 1024}))
 """
-
 
 def _step_table(context: BenchContext, sizes) -> Table:
     table = Table("longchain_step", ("n", "method", "median_s", "ratio_to_aba"))
