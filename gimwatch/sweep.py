@@ -105,12 +105,33 @@ def _dask_client(scheduler: str):
             n_workers=os.cpu_count() or 1, threads_per_worker=1, dashboard_address=None
         )
         return Client(cluster), cluster
+    _check_address(scheduler)  # a malformed address fails now, not after a 10 s timeout
     try:
         return Client(scheduler, timeout="10s"), None
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(
             "--scheduler", "the address of a running Dask scheduler or 'local'", scheduler
         ) from exc
+
+
+def _check_address(scheduler: str) -> None:
+    """Refuse what is not ``[scheme://]host:port`` with a port in 1..65535."""
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(scheduler if "://" in scheduler else f"tcp://{scheduler}")
+    try:
+        port = parts.port
+    except ValueError:  # out of range or not a number
+        port = None
+    if (
+        parts.scheme not in ("tcp", "tls", "ws", "wss", "ucx")
+        or not parts.hostname
+        or not port
+        or parts.path not in ("", "/")
+    ):
+        raise InputError(
+            "--scheduler", "'local' or a Dask scheduler address tcp://host:port", scheduler
+        )
 
 
 def _run_dask(tasks, scheduler, done, results) -> None:
