@@ -433,11 +433,13 @@ def load_scene(path: str | Path) -> Scene:
     """
     path = Path(path)
     try:
+        if not path.exists():  # also a path through a file (NotADirectoryError)
+            raise SceneError(str(path), "", "no such file")
         if path.is_dir():
             raise SceneError(str(path), "", "is a directory, not a scene file")
-        if path.exists() and not path.is_file():  # a FIFO or device could block forever
+        if not path.is_file():  # a FIFO or device could block forever
             raise SceneError(str(path), "", "is not a regular file (a device, FIFO or socket)")
-        if path.exists() and path.stat().st_size > MAX_SCENE_BYTES:
+        if path.stat().st_size > MAX_SCENE_BYTES:
             raise SceneError(str(path), "", f"is larger than {MAX_SCENE_BYTES} bytes")
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError as exc:
