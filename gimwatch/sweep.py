@@ -115,7 +115,7 @@ def _dask_client(scheduler: str):
 
 
 def _check_address(scheduler: str) -> None:
-    """Refuse what is not ``[scheme://]host:port`` with a port in 1..65535."""
+    """Refuse what is not ``[scheme://]host:port`` (port 1..65535) or ``inproc://...``."""
     from urllib.parse import urlsplit
 
     parts = urlsplit(scheduler if "://" in scheduler else f"tcp://{scheduler}")
@@ -123,12 +123,16 @@ def _check_address(scheduler: str) -> None:
         port = parts.port
     except ValueError:  # out of range or not a number
         port = None
-    if (
-        parts.scheme not in ("tcp", "tls", "ws", "wss", "ucx")
-        or not parts.hostname
-        or not port
-        or parts.path not in ("", "/")
-    ):
+    if parts.scheme == "inproc":  # inproc://host/pid/n, a scheduler in this process
+        well_formed = bool(parts.hostname)
+    else:
+        well_formed = (
+            parts.scheme in ("tcp", "tls", "ws", "wss", "ucx")
+            and bool(parts.hostname)
+            and bool(port)
+            and parts.path in ("", "/")
+        )
+    if not well_formed:
         raise InputError(
             "--scheduler", "'local' or a Dask scheduler address tcp://host:port", scheduler
         )
