@@ -26,7 +26,7 @@ from gimwatch.backends import make_backend
 from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.effects import build_effects, joint_vector
 from gimwatch.errors import GimwatchError, SceneError, SimulationError
-from gimwatch.robots import Robot, load_robot, neutral_configuration
+from gimwatch.robots import DATA_NV_LIMIT, Robot, _too_large, load_robot, neutral_configuration
 from gimwatch.scene import Scene
 from gimwatch.watch import Alarm, Watch
 
@@ -108,6 +108,8 @@ def _chain_robot(params: dict, floating: bool) -> Robot:
     from gimwatch.robots import _build_model
 
     options = {k: v for k, v in params.items() if k != "n"}
+    if params["n"] + 6 * floating > DATA_NV_LIMIT:  # checked before any URDF is generated
+        raise _too_large(f"chain:{params['n']}", params["n"] + 6 * floating)
     spec = chain_spec(params["n"], **options)
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
@@ -120,7 +122,7 @@ def load_scene_robot(scene: Scene) -> Robot:
     try:
         if scene.robot.chain is not None:
             return _chain_robot(scene.robot.chain, scene.robot.floating)
-        return load_robot(scene.robot.spec, floating=scene.robot.floating)
+        return load_robot(scene.robot.spec, floating=scene.robot.floating, max_nv=DATA_NV_LIMIT)
     except SceneError:
         raise
     except GimwatchError as exc:
