@@ -23,17 +23,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from gimwatch import __version__
 from gimwatch.bench.denoc import COLUMNS, run
+from gimwatch.environment import cpu_model
 from gimwatch.results import write_text_atomic
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def _fmt(x: float) -> str:
@@ -56,7 +47,8 @@ def main(argv: list[str] | None = None) -> int:
         "# DeNOC (numpy) vs Pinocchio (C++)",
         "",
         f"gimwatch {__version__}, Pinocchio {pin.__version__}, numpy {np.__version__}, "
-        f"Python {platform.python_version()}; {datetime.date.today()}; {_cpu()}; BLAS 1 thread.",
+        f"Python {platform.python_version()}; {datetime.date.today()}; {cpu_model()}; "
+        "BLAS 1 thread.",
         "Median time per call (µs) on chain:n (paper rods), one random state; "
         "ratio = DeNOC / Pinocchio.",
         "",

@@ -10,13 +10,11 @@ import csv
 import datetime
 import io
 import math
-import platform
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
-from gimwatch._version import __version__
+from gimwatch.environment import cpu_model, versions
 from gimwatch.results import write_bytes_atomic, write_json_atomic, write_text_atomic
 from gimwatch.survey import DOF_METRICS, METRICS, RobotSurvey, SurveyResult
 from gimwatch.survey_trajectory import TrajectoryStatistics
@@ -47,26 +45,6 @@ def _f(value: float) -> str:
 
 def _base(robot: RobotSurvey) -> str:
     return ("floating" if robot.floating else "fixed") + ("*" if robot.note else "")
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def _versions() -> dict[str, str]:
-    versions = {"gimwatch": __version__}
-    for package in ("pin", "example-robot-data-loaders", "numpy", "scipy"):
-        try:
-            versions[package] = metadata.version(package)
-        except metadata.PackageNotFoundError:
-            versions[package] = "?"
-    return versions
 
 
 def _trajectory_record(stats: TrajectoryStatistics | None) -> dict | None:
@@ -142,7 +120,7 @@ def survey_record(result: SurveyResult, *, wall_time_s: float | None = None) -> 
         "interrupted": result.interrupted,
         "not_reached": list(result.not_reached),
         "wall_time_s": wall_time_s,
-        "versions": _versions(),
+        "versions": versions(),
         "robots": robots,
         "failures": [vars(f) for f in result.failures],
     }
@@ -286,12 +264,13 @@ def _trajectory_section(result: SurveyResult) -> list[str]:
 
 
 def _report(result: SurveyResult, wall_time_s: float | None) -> str:
-    versions = ", ".join(f"{k} {v}" for k, v in _versions().items())
+    libraries = ", ".join(f"{k} {v}" for k, v in versions().items())
     wall = "" if wall_time_s is None else f", wall time {wall_time_s:.1f} s"
     lines = [
         "# Survey: does the diagonal ratio track κ on real robots?",
         "",
-        f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}; {versions}; CPU {_cpu()}.",
+        f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}; {libraries}; "
+        f"CPU {cpu_model()}.",
         f"{result.samples} random configurations per robot + the neutral one (sample 0), "
         f"seed {result.seed}{wall}. α = κ/δ is calibrated at the neutral configuration; "
         "αδ errors are over the random samples.",
