@@ -102,12 +102,16 @@ def _apply_t(X: list, x: list) -> list:
 
 def _cross_motion(v: list, m: list) -> list:
     w, u = v[:3], v[3:]
-    return _cross(w, m[:3]) + [a + b for a, b in zip(_cross(w, m[3:]), _cross(u, m[:3]), strict=True)]
+    return _cross(w, m[:3]) + [
+        a + b for a, b in zip(_cross(w, m[3:]), _cross(u, m[:3]), strict=True)
+    ]
 
 
 def _cross_force(v: list, f: list) -> list:
     w, u = v[:3], v[3:]
-    return [a + b for a, b in zip(_cross(w, f[:3]), _cross(u, f[3:]), strict=True)] + _cross(w, f[3:])
+    return [a + b for a, b in zip(_cross(w, f[:3]), _cross(u, f[3:]), strict=True)] + _cross(
+        w, f[3:]
+    )
 
 
 class TreeReference:
@@ -233,7 +237,10 @@ class TreeReference:
 
     def inverse_dynamics(self, q: npt.ArrayLike, v: npt.ArrayLike, a: npt.ArrayLike) -> list:
         """τ = RNEA(q, v, a) in mpmath (Featherstone Table 5.1), public coordinate order."""
-        q, v, a = (self._check(n, x, s) for n, x, s in (("q", q, self.nq), ("v", v, self.nv), ("a", a, self.nv)))
+        q, v, a = (
+            self._check(n, x, s)
+            for n, x, s in (("q", q, self.nq), ("v", v, self.nv), ("a", a, self.nv))
+        )
         tree = self.tree
         with mpmath.workdps(self.dps):
             X, S = self._joints(q)
@@ -246,12 +253,26 @@ class TreeReference:
                     continue
                 k = self.v_index[i]
                 qdd = _mp(a[k : k + len(S[i][0])])
-                joint = [mpmath.fsum(S[i][r][b] * qdd[b] for b in range(len(qdd))) for r in range(6)]
-                ai = [x + y + z for x, y, z in zip(self._frame_acceleration(i, X, acc), joint, bias[i], strict=True)]
+                joint = [
+                    mpmath.fsum(S[i][r][b] * qdd[b] for b in range(len(qdd))) for r in range(6)
+                ]
+                ai = [
+                    x + y + z
+                    for x, y, z in zip(
+                        self._frame_acceleration(i, X, acc), joint, bias[i], strict=True
+                    )
+                ]
                 acc.append(ai)
                 I = self._inertia[i]
                 momentum = _apply(I, twist[i])
-                force.append([x + y for x, y in zip(_apply(I, ai), _cross_force(twist[i], momentum), strict=True)])
+                force.append(
+                    [
+                        x + y
+                        for x, y in zip(
+                            _apply(I, ai), _cross_force(twist[i], momentum), strict=True
+                        )
+                    ]
+                )
             tau = [mpmath.mpf(0)] * self.nv
             for i in range(tree.size - 1, 0 if not tree.floating else -1, -1):
                 k = self.v_index[i]
@@ -265,7 +286,10 @@ class TreeReference:
 
     def forward_dynamics_mp(self, q: npt.ArrayLike, v: npt.ArrayLike, tau: npt.ArrayLike) -> list:
         """q̈ = ABA(q, v, τ) in mpmath (Featherstone Table 7.1), public coordinate order."""
-        q, v, tau = (self._check(n, x, s) for n, x, s in (("q", q, self.nq), ("v", v, self.nv), ("tau", tau, self.nv)))
+        q, v, tau = (
+            self._check(n, x, s)
+            for n, x, s in (("q", q, self.nq), ("v", v, self.nv), ("tau", tau, self.nv))
+        )
         tree = self.tree
         n = tree.size
         with mpmath.workdps(self.dps):
@@ -292,7 +316,13 @@ class TreeReference:
                 if i == 0:
                     continue
                 UDinv = _matmul(Ui, Dinv[i])
-                Ia = [[IA[i][r][c] - mpmath.fsum(UDinv[r][b] * Ui[c][b] for b in range(width)) for c in range(6)] for r in range(6)]
+                Ia = [
+                    [
+                        IA[i][r][c] - mpmath.fsum(UDinv[r][b] * Ui[c][b] for b in range(width))
+                        for c in range(6)
+                    ]
+                    for r in range(6)
+                ]
                 Ia_c = _apply(Ia, bias[i])
                 UDu = [mpmath.fsum(UDinv[r][b] * u[i][b] for b in range(width)) for r in range(6)]
                 pa = [pA[i][r] + Ia_c[r] + UDu[r] for r in range(6)]
@@ -309,15 +339,23 @@ class TreeReference:
                     acc[i] = self._base_acceleration()
                     continue
                 k, width = self.v_index[i], len(S[i][0])
-                ai = [x + y for x, y in zip(self._frame_acceleration(i, X, acc), bias[i], strict=True)]
+                ai = [
+                    x + y for x, y in zip(self._frame_acceleration(i, X, acc), bias[i], strict=True)
+                ]
                 Ut_a = [mpmath.fsum(U[i][r][b] * ai[r] for r in range(6)) for b in range(width)]
                 rhs = [u[i][b] - Ut_a[b] for b in range(width)]
-                dd = [mpmath.fsum(Dinv[i][b][c] * rhs[c] for c in range(width)) for b in range(width)]
+                dd = [
+                    mpmath.fsum(Dinv[i][b][c] * rhs[c] for c in range(width)) for b in range(width)
+                ]
                 for b in range(width):
                     qdd[k + b] = dd[b]
-                acc[i] = [ai[r] + mpmath.fsum(S[i][r][b] * dd[b] for b in range(width)) for r in range(6)]
+                acc[i] = [
+                    ai[r] + mpmath.fsum(S[i][r][b] * dd[b] for b in range(width)) for r in range(6)
+                ]
             return qdd
 
-    def forward_dynamics(self, q: npt.ArrayLike, v: npt.ArrayLike, tau: npt.ArrayLike) -> np.ndarray:
+    def forward_dynamics(
+        self, q: npt.ArrayLike, v: npt.ArrayLike, tau: npt.ArrayLike
+    ) -> np.ndarray:
         """q̈ at ``dps`` digits, rounded to float64."""
         return np.array([float(x) for x in self.forward_dynamics_mp(q, v, tau)])

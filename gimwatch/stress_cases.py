@@ -1,5 +1,6 @@
-"""The hard cases of the stress suite: long, tapered, lopsided and mixed chains, robots at
-singular poses and a floating humanoid, each a robot plus one configuration.
+"""The hard cases of the stress suite, each a robot plus one configuration.
+
+Long, tapered, lopsided and mixed chains, robots at singular poses, floating humanoids.
 
 Chains come from the generator (:func:`gimwatch.chains.chain_spec`); robots from
 example-robot-data. A case is built lazily (:meth:`StressCase.build`), so listing the cases
