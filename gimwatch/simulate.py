@@ -15,7 +15,8 @@ When the watch's alarm metric is above its threshold, ``watch.on_alarm`` acts (i
 ``warn`` records the alarm, ``stop`` ends the run cleanly, ``tighten`` lowers the adaptive
 integrator's tolerances in proportion to the estimate,
 ``rtol ← max(rtol₀ · threshold / estimate, RTOL_FLOOR)`` (atol by the same factor), at each
-sample where the metric is above the threshold (never loosened again), and
+sample where the metric is above the threshold and the estimate is a new maximum (never
+loosened again), and
 ``switch-backend`` moves the dynamics to :data:`MOST_ACCURATE_BACKEND`.
 
 Divergence: a non-finite state or acceleration, or a step size that collapses below
@@ -446,7 +447,7 @@ class Simulation:
             return
         factor = max(watch.alarm_threshold / estimate, RTOL_FLOOR / spec.rtol)
         rtol = spec.rtol * factor
-        if rtol >= 0.5 * float(np.min(solver.rtol)):  # only tighten, and by 2x at least
+        if rtol >= 0.99 * float(np.min(solver.rtol)):  # only ever tighten
             return
         self.actions.append(
             f"t = {t:.6g} s: {watch.alarm_metric} = {value:.4g}, "
