@@ -125,6 +125,12 @@ SECTIONS: dict[str, Section] = {
         Section(
             "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
         ),
+        Section(
+            "tighten",
+            "Tightening the tolerance on alarm",
+            "gimwatch.bench.tighten",
+            ("gimwatch.simulate",),
+        ),
     )
 }
 
