@@ -213,6 +213,9 @@ def run_case(case: StressCase, *, seed: int = 0, simulate: bool = False) -> Stre
         errors[name] = float(np.linalg.norm(a - exact) / np.linalg.norm(exact))
     bound = error_constant(nv) * kappa * EPS
     sim_status, drift = "", None
+    if simulate and case.no_simulation:
+        notes.append(f"not simulated: {case.no_simulation}")
+        simulate = False
     if simulate:
         sim_status, drift = simulate_case(case, robot, q)
     within = all(
