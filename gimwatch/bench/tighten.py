@@ -3,8 +3,9 @@
 On hard chains (gravity swing from rest, 2 s), each run's error is the largest joint-angle
 difference from a DOP853 run at rtol = atol = 1e-13, over the samples. Fixed tolerances
 (rtol = atol = 1e-4 … 1e-10) trace the work-precision curve of RK45; ``tighten`` starts at
-1e-5 and watches κ with the threshold at κ(t0)/10, the alarm is on from the first sample and tolerances fall as
-``rtol₀ · threshold / κ`` , tighter when the conditioning worsens. It buys accuracy per unit
+1e-5 and watches κ with the threshold at κ(t0)/10: the alarm is on from the first sample
+and the tolerances fall as ``rtol₀ · threshold / κ``, tighter as the conditioning worsens.
+The wall time includes the watch (one eigen-solve per sample). It buys accuracy per unit
 of time when its point lies below the fixed-tolerance curve (less error for the same wall
 time or RHS count).
 """
