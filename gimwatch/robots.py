@@ -35,6 +35,7 @@ __all__ = [
     "example_robot_names",
     "load_robot",
     "neutral_configuration",
+    "parse_chain_spec",
     "random_configurations",
 ]
 
@@ -197,6 +198,18 @@ def _too_large(spec: str, nv: int) -> RobotError:
     )
 
 
+def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
+    """The :class:`ChainSpec` of a ``chain:N`` specification, or None for other specs."""
+    match = _CHAIN_SPEC.match(str(spec))
+    if not match:
+        return None
+    try:
+        n = int(match.group(1))
+    except ValueError:
+        raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
+    return chain_spec(n)
+
+
 def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None = None) -> Robot:
     """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
 
@@ -216,14 +229,9 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
     text = str(spec)
     if not text.strip():
         raise InputError("the robot", "chain:N, a URDF path or an example-robot-data name", text)
-    chain = None
-    match = _CHAIN_SPEC.match(text)
-    if match:
-        try:
-            n = int(match.group(1))
-        except ValueError:
-            raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
-        chain = chain_spec(n)
+    chain = parse_chain_spec(text)
+    if chain is not None:
+        n = chain.n
         if max_nv is not None and n + 6 * floating > max_nv:
             raise _too_large(text, n + 6 * floating)
         xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name

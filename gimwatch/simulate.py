@@ -34,7 +34,7 @@ import numpy as np
 import pinocchio as pin
 import scipy.integrate
 
-from gimwatch.backends import make_backend, model_with_gravity
+from gimwatch.backends import make_backend
 from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.effects import build_effects, joint_vector
 from gimwatch.errors import GimwatchError, SceneError, SimulationError
@@ -200,15 +200,13 @@ class Simulation:
                 "quaternion coordinates: use RK4 or semi-implicit-euler",
             )
         self.conservative = all(e.conservative for e in self.effects)
-        if self.conservative:
-            self._energy_model = model_with_gravity(robot, gravity)
-            self._energy_data = self._energy_model.createData()
         spec = scene.watch
         self.watch = Watch(
             robot,
             spec.metrics,
             alarm_metric=spec.alarm_metric,
             alarm_threshold=spec.alarm_threshold,
+            dynamics=self.backend,
         )
         self.rhs_evaluations = 0
         self._fallback = self._check_on_alarm(gravity)
@@ -256,16 +254,11 @@ class Simulation:
         q, v = x[:nq], x[nq:]
         return np.concatenate((v, self.acceleration(t, q, v)))
 
-    def energy(self, q: np.ndarray, v: np.ndarray) -> float:
-        """Kinetic + gravity potential + spring energy (J), Pinocchio's energy functions."""
-        model, data = self._energy_model, self._energy_data
-        kinetic = pin.computeKineticEnergy(model, data, q, v)
-        potential = pin.computePotentialEnergy(model, data, q)
-        return float(kinetic + potential + sum(e.potential_energy(q) for e in self.effects))
-
-    def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
-        """Kinetic energy ½ vᵀ M v (J)."""
-        return float(pin.computeKineticEnergy(self._energy_model, self._energy_data, q, v))
+    def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+        """(total, kinetic) energy in J: kinetic + gravity potential + springs, from the backend."""
+        kinetic, potential = self.backend.energy(q, v)
+        springs = sum(e.potential_energy(q) for e in self.effects)
+        return float(kinetic + potential + springs), float(kinetic)
 
     # -- running -------------------------------------------------------------------------
     def _integrate_q(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
@@ -378,8 +371,9 @@ class Simulation:
             qs.append(np.array(q))
             vs.append(np.array(v))
             if self.conservative:
-                energies.append(self.energy(q, v))
-                kinetic.append(self.kinetic_energy(q, v))
+                total, kinetic_now = self.energy(q, v)
+                energies.append(total)
+                kinetic.append(kinetic_now)
             alarm = self.watch.sample(t, q)
             if alarm is not None and scene.watch.on_alarm == "stop":
                 return (

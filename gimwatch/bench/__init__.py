@@ -125,6 +125,7 @@ SECTIONS: dict[str, Section] = {
         Section(
             "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
         ),
+        Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain"),
         Section(
             "tighten",
             "Tightening the tolerance on alarm",
