@@ -38,7 +38,15 @@ from gimwatch.backends import make_backend
 from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.effects import build_effects, joint_vector
 from gimwatch.errors import GimwatchError, SceneError, SimulationError
-from gimwatch.robots import Robot, load_robot, neutral_configuration
+from gimwatch.robots import (
+    DATA_NV_LIMIT,
+    MAX_TREE_DEPTH,
+    Robot,
+    _too_deep,
+    _too_large,
+    load_robot,
+    neutral_configuration,
+)
 from gimwatch.scene import Scene
 from gimwatch.watch import Alarm, Watch
 
@@ -149,6 +157,12 @@ def _chain_robot(params: dict, floating: bool) -> Robot:
     from gimwatch.robots import _build_model
 
     options = {k: v for k, v in params.items() if k != "n"}
+    # checked before any URDF is generated: a floating base needs Pinocchio's Data (memory
+    # ∝ nv³); a fixed one runs on the O(n) denoc backend, up to the URDF parser's depth
+    if floating and params["n"] + 6 > DATA_NV_LIMIT:
+        raise _too_large(f"chain:{params['n']}", params["n"] + 6)
+    if params["n"] > MAX_TREE_DEPTH:
+        raise _too_deep(f"chain:{params['n']}")
     spec = chain_spec(params["n"], **options)
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
@@ -161,7 +175,10 @@ def load_scene_robot(scene: Scene) -> Robot:
     try:
         if scene.robot.chain is not None:
             return _chain_robot(scene.robot.chain, scene.robot.floating)
-        return load_robot(scene.robot.spec, floating=scene.robot.floating)
+        floating = scene.robot.floating
+        return load_robot(
+            scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None
+        )
     except SceneError:
         raise
     except GimwatchError as exc:
