@@ -77,6 +77,7 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
         "alpha": trajectory.alpha,
         "estimator_quality": quality,
         "alarms": [asdict(alarm) for alarm in trajectory.alarms],
+        "actions": list(trajectory.actions),
     }
 
 
