@@ -60,7 +60,7 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
         "scene": {"source": scene.source, **scene.raw},
         "robot": trajectory.robot,
         "effects": list(trajectory.effects),
-        "backend": scene.backend,
+        "backend": trajectory.backend or scene.backend,
         "integrator": asdict(scene.integrator),
         "versions": versions(),
         "status": trajectory.status,

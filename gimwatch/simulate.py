@@ -104,6 +104,8 @@ class Trajectory:
         alpha: α of the scaled diagonal ratio when watched.
         alarms: Alarms raised, in time order.
         actions: What ``on_alarm`` did (tolerances tightened, backend switched), in time order.
+        backend: The dynamics backend the run ended on (the scene's, unless the robot was too
+            large for Pinocchio's Data or ``switch-backend`` acted).
         status: One of :data:`STATUSES`.
         message: Why the run stopped early ("" when completed).
         steps: Integrator steps taken.
@@ -129,6 +131,7 @@ class Trajectory:
     effects: tuple[str, ...] = field(default=())
     kinetic_peak: float = 0.0
     actions: tuple[str, ...] = field(default=())
+    backend: str = ""
 
     @property
     def conservative(self) -> bool:
@@ -444,6 +447,7 @@ class Simulation:
             effects=scene.effect_names,
             kinetic_peak=float(max(kinetic)),
             actions=tuple(self.actions),
+            backend=self.backend.name,
         )
 
     def _tighten(self, t: float) -> None:
