@@ -1,4 +1,5 @@
 import csv
+import io
 import json
 
 import pytest
@@ -24,7 +25,7 @@ def test_quick_run_writes_every_file(quick_run):
     assert code == 0
     assert {"conditioning", "estimators", "accuracy"} <= set(RUNNABLE)
     for name in ("conditioning", "estimators", "accuracy"):
-        rows = list(csv.DictReader((out / f"{name}.csv").open()))
+        rows = list(csv.DictReader(io.StringIO((out / f"{name}.csv").read_text())))
         module = __import__(f"gimwatch.bench.{name}", fromlist=["COLUMNS"])
         assert tuple(rows[0]) == module.COLUMNS
         record = json.loads((out / f"{name}.json").read_text())
@@ -42,7 +43,7 @@ def test_quick_run_writes_every_file(quick_run):
 
 def test_quick_run_measures_what_it_claims(quick_run):
     _, out = quick_run
-    rows = list(csv.DictReader((out / "conditioning.csv").open()))
+    rows = list(csv.DictReader(io.StringIO((out / "conditioning.csv").read_text())))
     exact = [r for r in rows if r["method"] == "kappa_crba_eigvalsh"]
     assert all(float(r["rel_error"]) == 0 for r in exact)
     for r in rows:  # δ is a lower bound of κ; Lanczos at 1e-10 finds κ
@@ -50,7 +51,7 @@ def test_quick_run_measures_what_it_claims(quick_run):
             assert float(r["ratio_to_kappa"]) <= 1
         if r["method"] == "kappa_lanczos_1e-10":
             assert float(r["rel_error"]) < 1e-6
-    accuracy = list(csv.DictReader((out / "accuracy.csv").open()))
+    accuracy = list(csv.DictReader(io.StringIO((out / "accuracy.csv").read_text())))
     assert all(float(r["rel_error"]) < 1e-10 for r in accuracy)
 
 
