@@ -69,7 +69,7 @@ def load_model(urdf_xml: str, gravity: np.ndarray):
     """
     import mujoco
 
-    xml, count = re.subn(r"(<robot\b[^>]*>)", lambda m: m.group(1) + _COMPILER, urdf_xml, 1)
+    xml, count = re.subn(r"(<robot\b[^>]*>)", lambda m: m.group(1) + _COMPILER, urdf_xml, count=1)
     if count != 1:
         raise InputError("urdf_xml", "URDF text with a <robot> tag", "no <robot> tag")
     model = mujoco.MjModel.from_xml_string(xml)
