@@ -180,18 +180,21 @@ def plot_work_precision(rows: list[dict], path: Path) -> Path:
     axes = figure.subplots(1, len(chains), squeeze=False)[0]
     styles = {}
     for ax, n in zip(axes, chains, strict=True):
-        for method in dict.fromkeys(r["method"] for r in rows if r["n"] == n):
+        curves = dict.fromkeys((r["simulator"], r["method"]) for r in rows if r["n"] == n)
+        for simulator, method in curves:
             points = sorted(
                 (r["wall_s"], max(r["error_rad"], 1e-16))
                 for r in rows
-                if r["n"] == n and r["method"] == method and np.isfinite(r["error_rad"])
+                if (r["n"], r["simulator"], r["method"]) == (n, simulator, method)
+                and np.isfinite(r["error_rad"])
             )
             if not points:
                 continue
-            style = styles.setdefault(method, f"C{len(styles) % 10}")
+            label = f"{simulator} {method}"
+            color = styles.setdefault(label, f"C{len(styles) % 10}")
             x, y = zip(*points, strict=True)
-            dashed = "--" if method.startswith("mujoco") else "-"
-            ax.loglog(x, y, "o" + dashed, color=style, label=method, markersize=3)
+            dashed = "--" if simulator == "mujoco" else "-"
+            ax.loglog(x, y, "o" + dashed, color=color, label=label, markersize=3)
         ax.axhline(1e-10, color="k", lw=0.8, ls=":")
         ax.set_xlabel("wall time (s)")
         ax.set_ylabel("final-state error, max |q - q_ref| (rad)")
