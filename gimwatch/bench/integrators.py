@@ -37,7 +37,7 @@ from gimwatch.errors import InputError
 from gimwatch.scene import parse_scene
 from gimwatch.simulate import Simulation
 
-__all__ = ["CAP_S", "COLUMNS", "TARGET_ERROR_RAD", "run"]
+__all__ = ["CAP_S", "COLUMNS", "TARGET_ERROR_RAD", "chain_scene_table", "run"]
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 ADAPTIVE = ("DOP853", "RK45", "Radau", "LSODA")
@@ -68,7 +68,16 @@ class _TooSlow(Exception):
     pass
 
 
-def _scene_table(n: int, quick: bool) -> dict:
+def chain_scene_table(n: int, *, duration_s: float | None = None) -> dict:
+    """The TOML table of ``scenes/chain_<n>.toml`` with the δ watch only and ``aba``.
+
+    Args:
+        n: 4, 10 or 20 (the scenes that exist).
+        duration_s: Overrides the scene's duration when given.
+
+    Raises:
+        InputError: The scene file is missing (gimwatch run outside its checkout).
+    """
     path = SCENES / f"chain_{n}.toml"
     try:
         table = tomllib.loads(path.read_text(encoding="utf-8"))
@@ -76,8 +85,8 @@ def _scene_table(n: int, quick: bool) -> dict:
         raise InputError(str(path), "a readable scene file", "not found") from exc
     table["watch"] = {"metrics": ["diagonal_ratio"]}
     table.setdefault("dynamics", {})["backend"] = "aba"
-    if quick:
-        table["duration"] = 0.2
+    if duration_s is not None:
+        table["duration"] = duration_s
     return table
 
 
@@ -254,7 +263,7 @@ def run(context: BenchContext) -> SectionResult:
     references = {}
     peer = mujoco_peer.available()
     for n in chains:
-        scene = _scene_table(n, context.quick)
+        scene = chain_scene_table(n, duration_s=0.2 if context.quick else None)
         context.progress(f"  chain:{n}: reference DOP853 at 1e-14 and 1e-13")
         reference, _ = _simulate(scene, {"method": "DOP853", "rtol": 1e-14, "atol": 1e-14}, 1e9)
         check, _ = _simulate(scene, {"method": "DOP853", "rtol": 1e-13, "atol": 1e-13}, 1e9)
