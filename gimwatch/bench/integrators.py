@@ -44,7 +44,7 @@ ADAPTIVE = ("DOP853", "RK45", "Radau", "LSODA")
 FIXED = ("RK4", "semi-implicit-euler")
 TOLERANCES = tuple(10.0**-k for k in range(3, 13))
 STEPS_S = (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5)
-CAP_S = 25.0
+CAP_S = 10.0
 #: The acceptance's final-state error (rad) and the chain it is judged on.
 TARGET_ERROR_RAD = 1e-10
 TARGET_CHAIN = 10
