@@ -182,14 +182,18 @@ def plot_work_precision(rows: list[dict], path: Path) -> Path:
     for ax, n in zip(axes, chains, strict=True):
         curves = dict.fromkeys((r["simulator"], r["method"]) for r in rows if r["n"] == n)
         for simulator, method in curves:
-            points = sorted(
-                (r["wall_s"], max(r["error_rad"], 1e-16))
+            curve = [
+                r
                 for r in rows
                 if (r["n"], r["simulator"], r["method"]) == (n, simulator, method)
                 and np.isfinite(r["error_rad"])
-            )
-            if not points:
+            ]
+            if not curve:
                 continue
+            # in order of the error control (loosest tolerance or largest step first),
+            # not of the measured (noisy) wall time
+            curve.sort(key=lambda r: -(r["rtol"] if np.isfinite(r["rtol"]) else r["dt_s"]))
+            points = [(r["wall_s"], max(r["error_rad"], 1e-16)) for r in curve]
             label = f"{simulator} {method}"
             color = styles.setdefault(label, f"C{len(styles) % 10}")
             x, y = zip(*points, strict=True)
