@@ -27,9 +27,12 @@ class GimAnalysis:
 
     Attributes:
         robot: Robot name.
+        method: ``"crba"`` (dense M from Pinocchio, symmetric eigensolver) or
+            ``"denoc-linear"`` (the O(n) path of :mod:`gimwatch.longchain`: κ by Lanczos,
+            ``eigenvalues`` only (λmin, λmax), no forward pivots).
         nv: Size of the GIM.
         q: The configuration (length nq).
-        kappa: κ₂ = λmax/λmin.
+        kappa: κ₂ = λmax/λmin (None when not asked for).
         diagonal_ratio: δ = max M_ii / min M_ii.
         pivot_ratio_forward: max/min LDLᵀ pivot (elimination from the root).
         pivot_ratio_backward: max/min UDUᵀ pivot (elimination from the tips).
@@ -44,16 +47,17 @@ class GimAnalysis:
     robot: str
     nv: int
     q: tuple[float, ...]
-    kappa: float
+    kappa: float | None
     diagonal_ratio: float
-    pivot_ratio_forward: float
-    pivot_ratio_backward: float
-    lambda_min: float
-    lambda_max: float
+    pivot_ratio_forward: float | None
+    pivot_ratio_backward: float | None
+    lambda_min: float | None
+    lambda_max: float | None
     eigenvalues: tuple[float, ...]
     diagonal: tuple[float, ...]
     max_diagonal_dof: str
     min_diagonal_dof: str
+    method: str = "crba"
 
     def to_dict(self) -> dict:
         """A JSON-ready dict (lists for the vectors)."""

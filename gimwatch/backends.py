@@ -8,17 +8,25 @@
 
 Each backend owns a copy of the Pinocchio model whose ``gravity`` is the scene's vector,
 or zero when the scene declares no gravity: the recursions then add nothing for it.
+
+A backend is also where the watch and the energy get M(q), diag M(q) and the energy from,
+so that a long chain on ``denoc`` never builds a Pinocchio Data (its memory grows as nv³):
+above :data:`~gimwatch.robots.DATA_NV_LIMIT` coordinates, :func:`make_backend` switches to
+``denoc`` and says so with a :class:`~gimwatch.errors.BackendWarning`.
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import ClassVar
 
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
 
-from gimwatch.robots import Robot
+from gimwatch.errors import BackendWarning
+from gimwatch.inertia import gim, gim_diagonal
+from gimwatch.robots import DATA_NV_LIMIT, Robot
 
 __all__ = ["BACKENDS", "Backend", "make_backend", "model_with_gravity"]
 
@@ -43,6 +51,28 @@ class Backend:
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Joint accelerations a (length nv) for the generalized force τ."""
         raise NotImplementedError
+
+    def _pinocchio(self) -> tuple[pin.Model, pin.Data]:
+        """The model with the scene's gravity and a Data, made on first use."""
+        if not hasattr(self, "model"):
+            self.model = model_with_gravity(self.robot, self.gravity)
+        if not hasattr(self, "data"):
+            self.data = self.robot.new_data()
+        return self.model, self.data
+
+    def gim(self, q: np.ndarray) -> np.ndarray:
+        """M(q), from Pinocchio's CRBA."""
+        return gim(self.robot, q, data=self._pinocchio()[1])
+
+    def gim_diagonal(self, q: np.ndarray) -> np.ndarray:
+        """Diag M(q) in O(n), from Pinocchio's composite inertias."""
+        return gim_diagonal(self.robot, q, data=self._pinocchio()[1])
+
+    def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+        """(kinetic, gravity potential) energy in J, from Pinocchio."""
+        model, data = self._pinocchio()
+        kinetic = pin.computeKineticEnergy(model, data, q, v)
+        return float(kinetic), float(pin.computePotentialEnergy(model, data, q))
 
 
 class AbaBackend(Backend):
@@ -77,7 +107,11 @@ class CrbaCholeskyBackend(Backend):
 
 
 class DenocBackend(Backend):
-    """gimwatch's DeNOC forward dynamics (imported when the backend is built)."""
+    """gimwatch's DeNOC forward dynamics (imported when the backend is built).
+
+    With a fixed base the recursions are the compiled O(n) ones, and M's diagonal and the
+    energy come from them too, so no Pinocchio Data is ever built.
+    """
 
     name = "denoc"
 
@@ -85,13 +119,27 @@ class DenocBackend(Backend):
         super().__init__(robot, gravity)
         from gimwatch.denoc import DenocModel
 
-        self.denoc = DenocModel.from_urdf(
-            robot.urdf_xml, floating=robot.floating, joint_order=robot.joint_names
-        )
+        if robot.chain is not None and not robot.floating:
+            self.denoc = DenocModel.from_chain(robot.chain)  # no URDF parsing for chain:N
+        else:
+            self.denoc = DenocModel.from_urdf(
+                robot.urdf_xml, floating=robot.floating, joint_order=robot.joint_names
+            )
         self._g = tuple(float(x) for x in self.gravity)
 
     def forward_dynamics(self, q, v, tau):
         return np.asarray(self.denoc.forward_dynamics(q, v, tau, gravity=self._g), dtype=float)
+
+    def gim(self, q):
+        return self.denoc.gim(q)
+
+    def gim_diagonal(self, q):
+        return self.denoc.gim_diagonal(q)
+
+    def energy(self, q, v):
+        if self.robot.floating:
+            return super().energy(q, v)
+        return self.denoc.energy(q, v, gravity=self._g)
 
 
 #: The registry: scene backend name -> class.
@@ -101,5 +149,13 @@ BACKENDS: dict[str, type[Backend]] = {
 
 
 def make_backend(name: str, robot: Robot, gravity: np.ndarray | None) -> Backend:
-    """Build the backend registered as ``name``."""
+    """Build the backend registered as ``name`` (``denoc`` instead above DATA_NV_LIMIT)."""
+    if name != DenocBackend.name and robot.nv > DATA_NV_LIMIT and not robot.floating:
+        warnings.warn(
+            f"{robot.name} has nv = {robot.nv} > {DATA_NV_LIMIT}: using the O(n) denoc backend "
+            f"instead of {name} (Pinocchio's Data would need GBs)",
+            BackendWarning,
+            stacklevel=2,
+        )
+        name = DenocBackend.name
     return BACKENDS[name](robot, gravity)

@@ -9,6 +9,7 @@ line prints that line and exits with status 2.
 from __future__ import annotations
 
 __all__ = [
+    "BackendWarning",
     "ConditioningError",
     "GimwatchError",
     "IllConditionedWarning",
@@ -105,3 +106,7 @@ class URDFWarning(UserWarning):
 
 class IllConditionedWarning(UserWarning):
     """The GIM's condition number (or its estimate) crossed a threshold."""
+
+
+class BackendWarning(UserWarning):
+    """gimwatch chose another dynamics backend than the one asked for, and why."""

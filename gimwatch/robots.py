@@ -35,6 +35,7 @@ __all__ = [
     "example_robot_names",
     "load_robot",
     "neutral_configuration",
+    "parse_chain_spec",
     "random_configurations",
 ]
 
@@ -47,6 +48,9 @@ _DEFAULT_TRANSLATION_M = 1.0
 MAX_URDF_BYTES = 64 * 1024 * 1024
 #: random_configurations refuses to allocate more numbers than this (400 MB).
 MAX_RANDOM_NUMBERS = 50_000_000
+#: Pinocchio's URDF parser recurses once per link along a branch and overflows the 8 MB
+#: C stack (a segmentation fault) between 3500 and 4000 links; deeper trees are refused.
+MAX_TREE_DEPTH = 2000
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,7 +175,14 @@ def _captured_stderr_fd() -> Iterator[list[str]]:
 def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     from gimwatch.urdf import check_urdf
 
-    check_urdf(xml, source)
+    root = check_urdf(xml, source)
+    depth = _tree_depth(root)
+    if depth > MAX_TREE_DEPTH:
+        raise URDFError(
+            source,
+            f"a branch of {depth} joints is deeper than Pinocchio's parser can read "
+            f"(limit {MAX_TREE_DEPTH}); use the DeNOC path (gimwatch.denoc) instead",
+        )
     # check_urdf reads every value urdfdom reads; should urdfdom still complain, its lines
     # become the error message instead of stray output on the user's terminal.
     with _captured_stderr_fd() as complaints:
@@ -189,12 +200,43 @@ def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     return model
 
 
+def _tree_depth(root) -> int:
+    """Joints on the longest root-to-leaf path of a URDF tree (check_urdf made it a tree)."""
+    children: dict[str, list[str]] = {}
+    child_links = set()
+    for joint in root.findall("joint"):
+        parent, child = joint.find("parent").get("link"), joint.find("child").get("link")
+        children.setdefault(parent, []).append(child)
+        child_links.add(child)
+    (top,) = (
+        link.get("name") for link in root.findall("link") if link.get("name") not in child_links
+    )
+    deepest, stack = 0, [(top, 0)]
+    while stack:
+        link, depth = stack.pop()
+        deepest = max(deepest, depth)
+        stack.extend((child, depth + 1) for child in children.get(link, ()))
+    return deepest
+
+
 def _too_large(spec: str, nv: int) -> RobotError:
     return RobotError(
         spec,
         f"nv = {nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
         f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
     )
+
+
+def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
+    """The :class:`ChainSpec` of a ``chain:N`` specification, or None for other specs."""
+    match = _CHAIN_SPEC.match(str(spec))
+    if not match:
+        return None
+    try:
+        n = int(match.group(1))
+    except ValueError:
+        raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
+    return chain_spec(n)
 
 
 def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None = None) -> Robot:
@@ -216,16 +258,15 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
     text = str(spec)
     if not text.strip():
         raise InputError("the robot", "chain:N, a URDF path or an example-robot-data name", text)
-    chain = None
-    match = _CHAIN_SPEC.match(text)
-    if match:
-        try:
-            n = int(match.group(1))
-        except ValueError:
-            raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
-        chain = chain_spec(n)
+    chain = parse_chain_spec(text)
+    if chain is not None:
+        n = chain.n
         if max_nv is not None and n + 6 * floating > max_nv:
             raise _too_large(text, n + 6 * floating)
+        if n > MAX_TREE_DEPTH:
+            raise RobotError(
+                text, f"Pinocchio's URDF parser reads at most {MAX_TREE_DEPTH} links in a chain"
+            )
         xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
     elif text in _example_robots():
         path = _example_robot_urdf(text)

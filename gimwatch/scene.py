@@ -85,6 +85,15 @@ _TOP_KEYS = {
 
 JointValues = float | tuple[float, ...] | dict[str, float]
 
+#: Size limits checked before anything runs, so an absurd scene fails at once instead of
+#: exhausting memory or running for years: samples kept (each a q, v and watch row),
+#: fixed integrator steps, initial |q| (rad or m) and |v| (rad/s or m/s; a larger speed
+#: shrinks an adaptive step towards zero), and the bytes of a scene file.
+MAX_SAMPLES = 1_000_000
+MAX_FIXED_STEPS = 100_000_000
+MAX_INITIAL_STATE = 1e6
+MAX_SCENE_BYTES = 1024 * 1024
+
 
 @dataclass(frozen=True)
 class RobotSpec:
@@ -214,7 +223,9 @@ class _Reader:
             raise self.fail(name, f"must be finite, got {value!r}")
         return tuple(float(x) for x in value)
 
-    def joint_values(self, name: str, default=None, *, nonnegative=False) -> JointValues:
+    def joint_values(
+        self, name: str, default=None, *, nonnegative=False, bound=math.inf
+    ) -> JointValues:
         if name not in self.table:
             return default
         value = self.table[name]
@@ -233,6 +244,8 @@ class _Reader:
             if not math.isfinite(x) or (nonnegative and x < 0):
                 rule = "finite and >= 0" if nonnegative else "finite"
                 raise self.fail(key, f"must be {rule}, got {x!r}")
+            if abs(x) > bound:
+                raise self.fail(key, f"must be within ±{bound:g}, got {x!r}")
         if isinstance(value, dict):
             return {k: float(v) for k, v in value.items()}
         if isinstance(value, list):
@@ -375,10 +388,22 @@ def parse_scene(
     sample = reader.number("sample", positive=True)
     if sample > duration:
         raise reader.fail("sample", f"must be <= duration ({duration} s), got {sample}")
+    if duration / sample > MAX_SAMPLES:
+        raise reader.fail(
+            "sample",
+            f"duration / sample must be at most {MAX_SAMPLES} samples, got {duration / sample:.3g}",
+        )
     dynamics = reader.sub("dynamics")
     dynamics.check_keys({"backend"})
     integrator = _integrator(reader.sub("integrator"))
     if integrator.fixed_step:
+        if duration / integrator.dt > MAX_FIXED_STEPS:
+            raise SceneError(
+                source,
+                "integrator.dt",
+                f"duration / dt must be at most {MAX_FIXED_STEPS} steps, "
+                f"got {duration / integrator.dt:.3g}",
+            )
         ratio = sample / integrator.dt
         if abs(ratio - round(ratio)) > 1e-9 * ratio:
             raise SceneError(
@@ -391,8 +416,8 @@ def parse_scene(
         robot=robot,
         duration_s=duration,
         sample_s=sample,
-        q=reader.joint_values("q", None),
-        v=reader.joint_values("v", 0.0),
+        q=reader.joint_values("q", None, bound=MAX_INITIAL_STATE),
+        v=reader.joint_values("v", 0.0, bound=MAX_INITIAL_STATE),
         effects=_effects(reader.sub("effects")),
         integrator=integrator,
         backend=dynamics.string("backend", "aba", choices=BACKENDS),
@@ -409,6 +434,14 @@ def load_scene(path: str | Path) -> Scene:
     """
     path = Path(path)
     try:
+        if not path.exists():  # also a path through a file (NotADirectoryError)
+            raise SceneError(str(path), "", "no such file")
+        if path.is_dir():
+            raise SceneError(str(path), "", "is a directory, not a scene file")
+        if not path.is_file():  # a FIFO or device could block forever
+            raise SceneError(str(path), "", "is not a regular file (a device, FIFO or socket)")
+        if path.stat().st_size > MAX_SCENE_BYTES:
+            raise SceneError(str(path), "", f"is larger than {MAX_SCENE_BYTES} bytes")
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError as exc:
         raise SceneError(str(path), "", "no such file") from exc

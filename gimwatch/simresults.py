@@ -165,7 +165,10 @@ def write_simulation(trajectory: Trajectory, directory: str | Path, *, plots: bo
     if directory.exists() and not directory.is_dir():
         raise OutputError(str(directory), "is a file, not a folder; give a folder name")
     prepare_directory(directory.parent)
-    staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
+    try:
+        staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
+    except OSError as exc:
+        raise OutputError(str(directory), f"cannot be created ({exc.strerror or exc})") from exc
     try:
         arrays = {"t": trajectory.t, "q": trajectory.q, "v": trajectory.v, **trajectory.watch}
         if trajectory.energy is not None:
@@ -195,11 +198,20 @@ def write_simulation(trajectory: Trajectory, directory: str | Path, *, plots: bo
         if directory.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{directory.name}.old.", dir=directory.parent))
             os.replace(directory, old / "previous")
-            os.replace(staging, directory)
+            try:
+                os.replace(staging, directory)
+            except BaseException:  # put the previous result back
+                os.replace(old / "previous", directory)
+                old.rmdir()
+                raise
             shutil.rmtree(old, ignore_errors=True)
         else:
             os.replace(staging, directory)
-    except BaseException:
+    except BaseException as exc:
         shutil.rmtree(staging, ignore_errors=True)
+        if isinstance(exc, OutputError):  # name the folder, not its staging copy
+            raise OutputError(str(directory), exc.problem) from exc
+        if isinstance(exc, OSError):
+            raise OutputError(str(directory), f"cannot be written ({exc.strerror or exc})") from exc
         raise
     return directory

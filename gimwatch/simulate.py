@@ -22,11 +22,11 @@ import numpy as np
 import pinocchio as pin
 import scipy.integrate
 
-from gimwatch.backends import make_backend, model_with_gravity
+from gimwatch.backends import make_backend
 from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.effects import build_effects, joint_vector
 from gimwatch.errors import GimwatchError, SceneError, SimulationError
-from gimwatch.robots import Robot, load_robot, neutral_configuration
+from gimwatch.robots import DATA_NV_LIMIT, Robot, _too_large, load_robot, neutral_configuration
 from gimwatch.scene import Scene
 from gimwatch.watch import Alarm, Watch
 
@@ -108,6 +108,8 @@ def _chain_robot(params: dict, floating: bool) -> Robot:
     from gimwatch.robots import _build_model
 
     options = {k: v for k, v in params.items() if k != "n"}
+    if params["n"] + 6 * floating > DATA_NV_LIMIT:  # checked before any URDF is generated
+        raise _too_large(f"chain:{params['n']}", params["n"] + 6 * floating)
     spec = chain_spec(params["n"], **options)
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
@@ -120,7 +122,7 @@ def load_scene_robot(scene: Scene) -> Robot:
     try:
         if scene.robot.chain is not None:
             return _chain_robot(scene.robot.chain, scene.robot.floating)
-        return load_robot(scene.robot.spec, floating=scene.robot.floating)
+        return load_robot(scene.robot.spec, floating=scene.robot.floating, max_nv=DATA_NV_LIMIT)
     except SceneError:
         raise
     except GimwatchError as exc:
@@ -159,15 +161,13 @@ class Simulation:
                 "quaternion coordinates: use RK4 or semi-implicit-euler",
             )
         self.conservative = all(e.conservative for e in self.effects)
-        if self.conservative:
-            self._energy_model = model_with_gravity(robot, gravity)
-            self._energy_data = self._energy_model.createData()
         spec = scene.watch
         self.watch = Watch(
             robot,
             spec.metrics,
             alarm_metric=spec.alarm_metric,
             alarm_threshold=spec.alarm_threshold,
+            dynamics=self.backend,
         )
         self.rhs_evaluations = 0
 
@@ -192,16 +192,11 @@ class Simulation:
         q, v = x[:nq], x[nq:]
         return np.concatenate((v, self.acceleration(t, q, v)))
 
-    def energy(self, q: np.ndarray, v: np.ndarray) -> float:
-        """Kinetic + gravity potential + spring energy (J), Pinocchio's energy functions."""
-        model, data = self._energy_model, self._energy_data
-        kinetic = pin.computeKineticEnergy(model, data, q, v)
-        potential = pin.computePotentialEnergy(model, data, q)
-        return float(kinetic + potential + sum(e.potential_energy(q) for e in self.effects))
-
-    def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
-        """Kinetic energy ½ vᵀ M v (J)."""
-        return float(pin.computeKineticEnergy(self._energy_model, self._energy_data, q, v))
+    def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+        """(total, kinetic) energy in J: kinetic + gravity potential + springs, from the backend."""
+        kinetic, potential = self.backend.energy(q, v)
+        springs = sum(e.potential_energy(q) for e in self.effects)
+        return float(kinetic + potential + springs), float(kinetic)
 
     # -- running -------------------------------------------------------------------------
     def _integrate_q(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
@@ -299,8 +294,9 @@ class Simulation:
             qs.append(np.array(q))
             vs.append(np.array(v))
             if self.conservative:
-                energies.append(self.energy(q, v))
-                kinetic.append(self.kinetic_energy(q, v))
+                total, kinetic_now = self.energy(q, v)
+                energies.append(total)
+                kinetic.append(kinetic_now)
             alarm = self.watch.sample(t, q)
             if alarm is not None and scene.watch.on_alarm == "stop":
                 return (

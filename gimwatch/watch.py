@@ -30,14 +30,20 @@ __all__ = ["METRICS", "Alarm", "EstimatorQuality", "Watch", "estimator_quality"]
 class _GimState:
     """Lazily computed, shared per-sample quantities of M(q)."""
 
-    def __init__(self, robot: Robot, data, q: np.ndarray, full: bool) -> None:
+    def __init__(self, robot: Robot, data, q: np.ndarray, full: bool, dynamics=None) -> None:
         self.robot, self.data, self.q, self.full = robot, data, q, full
+        self.dynamics = dynamics
         self._M = self._diag = self._eig = None
 
     @property
     def M(self) -> np.ndarray:
         if self._M is None:
-            self._M = conditioning.check_gim(gim(self.robot, self.q, data=self.data))
+            M = (
+                gim(self.robot, self.q, data=self.data)
+                if self.dynamics is None
+                else self.dynamics.gim(self.q)
+            )
+            self._M = conditioning.check_gim(M)
         return self._M
 
     @property
@@ -47,6 +53,8 @@ class _GimState:
                 np.diag(self.M).copy()
                 if self.full
                 else gim_diagonal(self.robot, self.q, data=self.data)
+                if self.dynamics is None
+                else self.dynamics.gim_diagonal(self.q)
             )
         return self._diag
 
@@ -216,6 +224,9 @@ class Watch:
         metrics: Names from :data:`METRICS`; only these are built and evaluated.
         alarm_metric: One of ``metrics`` (or None for no alarm).
         alarm_threshold: Threshold on the metric's condition-number scale.
+        dynamics: Where M(q) and diag M(q) come from: an object with ``gim(q)`` and
+            ``gim_diagonal(q)`` (a simulation passes its backend, so that a long chain on
+            ``denoc`` never builds a Pinocchio Data); None: Pinocchio, with a Data of its own.
     """
 
     def __init__(
@@ -225,11 +236,13 @@ class Watch:
         *,
         alarm_metric: str | None = None,
         alarm_threshold: float | None = None,
+        dynamics=None,
     ) -> None:
         self.robot = robot
+        self.dynamics = dynamics
         self.metrics = {name: METRICS[name]() for name in metrics}
         self.full = any(m.full for m in self.metrics.values())
-        self.data = robot.new_data() if self.metrics else None
+        self.data = robot.new_data() if self.metrics and dynamics is None else None
         self.alarm_metric, self.alarm_threshold = alarm_metric, alarm_threshold
         self.times: list[float] = []
         self.series: dict[str, list] = {name: [] for name in self.metrics}
@@ -240,7 +253,7 @@ class Watch:
         """Record the watched metrics at time ``t`` (s); return a new alarm, if one is raised."""
         if not self.metrics:
             return None
-        state = _GimState(self.robot, self.data, q, self.full)
+        state = _GimState(self.robot, self.data, q, self.full, self.dynamics)
         self.times.append(float(t))
         for name, metric in self.metrics.items():
             self.series[name].append(metric(state))

@@ -26,9 +26,11 @@ from pathlib import Path
 import pytest
 
 from gimwatch.analysis import analyze_configuration
+from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.cli import _commands, get_argument_parser, main
 from gimwatch.errors import GimwatchError, URDFWarning
-from gimwatch.robots import MAX_URDF_BYTES, load_robot, neutral_configuration
+from gimwatch.robots import MAX_TREE_DEPTH, MAX_URDF_BYTES, load_robot, neutral_configuration
+from gimwatch.scene import MAX_SCENE_BYTES
 
 BAD = Path(__file__).parent / "data" / "bad"
 MANIFEST = tomllib.loads((BAD / "MANIFEST.toml").read_text())
@@ -181,6 +183,27 @@ def test_bad_urdf_file_raises_a_gimwatch_error_for_library_users(key, entry, cap
     assert entry["expect"] in str(info.value)
 
 
+def _good_results(folder: Path) -> None:
+    """A results folder as a previous good run left it."""
+    folder.mkdir()
+    (folder / "summary.json").write_text('{"status": "completed"}\n')
+    (folder / "trajectory.csv").write_text("t,q:joint_1\n0.0,0.1\n")
+
+
+@pytest.mark.usefixtures("hang_guard")
+@pytest.mark.parametrize(
+    ("command", "make_argv", "key", "entry"),
+    [case for case in _file_cases() if case.values[2].startswith("scenes/")],
+)
+def test_bad_scene_keeps_a_previous_good_results_folder(
+    command, make_argv, key, entry, tmp_path, capsys, monkeypatch
+):
+    _good_results(tmp_path / "out")
+    argv = make_argv(str(BAD / key), tmp_path / "out")
+    code, out, err = _run_in(tmp_path, argv, capsys, monkeypatch)  # snapshot covers out/
+    _assert_one_error_line(code, out, err, str(BAD / key), entry["expect"])
+
+
 def _fifo(tmp: Path) -> str:
     os.mkfifo(tmp / "pipe.urdf")
     return str(tmp / "pipe.urdf")
@@ -190,6 +213,11 @@ def _sparse(tmp: Path) -> str:
     with open(tmp / "huge.urdf", "wb") as handle:
         handle.truncate(MAX_URDF_BYTES + 1)
     return str(tmp / "huge.urdf")
+
+
+def _write(path: Path, text: str) -> str:
+    path.write_text(text)
+    return str(path)
 
 
 def _under_a_file(tmp: Path) -> str:
@@ -212,6 +240,12 @@ BAD_PATHS = [
     ("oversized", _sparse, f"more than {MAX_URDF_BYTES} for a URDF"),
     ("path_under_a_file", _under_a_file, "robot.urdf: no such file"),
     ("empty_spec", lambda tmp: "", "the robot must be chain:N, a URDF path"),
+    (
+        "deeper_than_pinocchio_parses",
+        lambda tmp: _write(tmp / "deep.urdf", generate_chain_urdf(chain_spec(MAX_TREE_DEPTH + 1))),
+        f"a branch of {MAX_TREE_DEPTH + 1} joints is deeper than Pinocchio's parser can read",
+    ),
+    ("chain_deeper_than_pinocchio_parses", lambda tmp: "chain:100000", "chain:100000"),
     ("blank_spec", lambda tmp: "  ", "the robot must be chain:N, a URDF path"),
 ]
 
@@ -226,6 +260,74 @@ def test_bad_robot_path(command, maker, expect, tmp_path, capsys, monkeypatch):
     argv = ROBOT_COMMANDS[command](target, work / "out")
     code, out, err = _run_in(work, argv, capsys, monkeypatch)
     _assert_one_error_line(code, out, err, expect)
+
+
+#: The chain:3 scene the scene corpus varies (one thing wrong in each file).
+GOOD_SCENE = """robot = "chain:3"
+duration = 0.05
+sample = 0.01
+q = 0.1
+
+[effects.gravity]
+vector = [0.0, -9.81, 0.0]
+
+[watch]
+metrics = ["kappa", "diagonal_ratio"]
+"""
+
+
+def _sparse_scene(tmp: Path) -> str:
+    with open(tmp / "huge.toml", "wb") as handle:
+        handle.truncate(MAX_SCENE_BYTES + 1)
+    return str(tmp / "huge.toml")
+
+
+def _fifo_scene(tmp: Path) -> str:
+    os.mkfifo(tmp / "pipe.toml")
+    return str(tmp / "pipe.toml")
+
+
+def _deep_scene(tmp: Path) -> str:
+    _write(tmp / "deep.urdf", generate_chain_urdf(chain_spec(MAX_TREE_DEPTH + 1)))
+    return _write(tmp / "deep.toml", GOOD_SCENE.replace('"chain:3"', '"deep.urdf"'))
+
+
+#: Scene paths made at test time: (id, maker(tmp folder) -> path, expected fragment).
+BAD_SCENE_PATHS = [
+    ("fifo", _fifo_scene, "pipe.toml: is not a regular file"),
+    ("oversized", _sparse_scene, f"huge.toml: is larger than {MAX_SCENE_BYTES} bytes"),
+    (
+        "directory_named_toml",
+        lambda tmp: str((tmp / "d.toml").mkdir() or tmp / "d.toml"),
+        "d.toml: is a directory",
+    ),
+    ("scene_naming_a_deep_urdf", _deep_scene, "deep.urdf: a branch of"),
+]
+
+
+@pytest.mark.usefixtures("hang_guard")
+@pytest.mark.parametrize("command", sorted(SCENE_COMMANDS))
+@pytest.mark.parametrize(
+    ("maker", "expect"), [pytest.param(m, e, id=i) for i, m, e in BAD_SCENE_PATHS]
+)
+def test_bad_scene_path(command, maker, expect, tmp_path, capsys, monkeypatch):
+    work = tmp_path / "work"
+    work.mkdir()
+    _good_results(work / "out")
+    target = maker(tmp_path)
+    argv = SCENE_COMMANDS[command](target, work / "out")
+    code, out, err = _run_in(work, argv, capsys, monkeypatch)
+    _assert_one_error_line(code, out, err, expect)
+
+
+def test_the_good_scene_runs(tmp_path, capsys, monkeypatch):
+    """The control of the scene corpus: the scene it varies is valid and writes its folder."""
+    scene = _write(tmp_path / "good.toml", GOOD_SCENE)
+    code, _, err = _run_in(
+        tmp_path, ["simulate", scene, "-o", "out"], capsys, monkeypatch, fails=False
+    )
+    assert code == 0, err
+    assert (tmp_path / "out" / "summary.json").is_file()
 
 
 #: Bad command lines; ``{tmp}`` is the test's folder, which holds ``good.json``.
@@ -269,8 +371,10 @@ BAD_ARGUMENTS = [
     (["analyze", "chain:-3"], "the number of links must be an integer between 1"),
     (["analyze", "chain:abc"], "the N of chain:N must be a positive integer, got 'abc'"),
     (["analyze", "chain:10000000"], "the number of links must be an integer between 1"),
-    (["analyze", "chain:401"], "nv = 401 is too large for Pinocchio's Data"),
-    (["analyze", "chain:1000000"], "nv = 1000000 is too large for Pinocchio's Data"),
+    (["analyze", "chain:401", "--backend", "crba"], "nv = 401 is too large for Pinocchio's Data"),
+    (["analyze", "chain:1000000"], "the N of chain:N must be at most 200000, got 1000000"),
+    (["analyze", "chain:4", "--backend", "denoc", "--metrics", "kappa,x"], "metrics must be among"),
+    (["analyze", "chain:4", "--metrics", "kappa"], "--metrics must be used with the O(n) path"),
     (["analyze", "chain:396", "--floating"], "nv = 402 is too large for Pinocchio's Data"),
     (["analyze", "nope"], "robot 'nope': not chain:N"),
     (["analyze"], "the following arguments are required: robot"),
@@ -278,6 +382,37 @@ BAD_ARGUMENTS = [
     (["frobnicate"], "argument command: invalid choice: 'frobnicate'"),
     (["analyze", "chain:2", "--bogus"], "unrecognized arguments: --bogus"),
     (["demo", "-o", "{tmp}/good.json"], "good.json: is a file, not a folder"),
+    (["crosscheck", "chain:2", "--samples", "-1"], "argument --samples: must be a positive"),
+    (["crosscheck", "chain:2", "--samples", "0"], "argument --samples: must be a positive"),
+    (["crosscheck", "chain:2", "--samples", "abc"], "argument --samples: must be a positive"),
+    (["crosscheck", "chain:2", "--samples", "10**9"], "argument --samples: must be a positive"),
+    (["crosscheck", "chain:2", "--samples", "100000000000"], "count must be at most 25000000"),
+    (["crosscheck", "chain:2", "--tolerance", "-1"], "--tolerance must be a number > 0, got -1.0"),
+    (["crosscheck", "chain:2", "--tolerance", "0"], "--tolerance must be a number > 0, got 0.0"),
+    (["crosscheck", "chain:2", "--tolerance", "nan"], "--tolerance must be a number > 0, got nan"),
+    (["crosscheck", "chain:2", "--tolerance", "x"], "argument --tolerance: invalid float value"),
+    (["crosscheck", "chain:2", "--seed", "-1"], "argument --seed: must be an integer >= 0"),
+    (["crosscheck"], "the following arguments are required: ROBOT"),
+    (["survey", "chain:2", "--samples", "-1"], "argument --samples: must be a positive integer"),
+    (["survey", "chain:2", "--samples", "0"], "argument --samples: must be a positive integer"),
+    (["survey", "chain:2", "--chunk-size", "0"], "argument --chunk-size: must be a positive"),
+    (["survey", "chain:2", "--workers", "0"], "argument --workers: must be a positive integer"),
+    (["survey", "chain:2", "--seed", "-5"], "argument --seed: must be an integer >= 0"),
+    (["survey", "chain:2", "--scheduler", "nonsense"], "--scheduler must be 'local' or a Dask"),
+    (["survey", "chain:2", "--scheduler", "tcp://h:99999"], "got 'tcp://h:99999'"),
+    (["survey", "chain:2", "--scheduler", "http://h:8786"], "got 'http://h:8786'"),
+    (["survey", "chain:2", "--scheduler", "tcp://"], "got 'tcp://'"),
+    (["survey", "chain:2", "-o", "{tmp}/good.json"], "good.json: is a file, not a folder"),
+    (["bench", "nosuchsection"], "the bench section must be one of"),
+    (["bench", "--quick", "conditioning", "-o", "{tmp}/good.json"], "good.json: is a file"),
+    (["bench", "--seed", "-1"], "argument --seed: must be an integer >= 0"),
+    (["simulate", "{tmp}/missing.toml"], "missing.toml: no such file"),
+    (["simulate", "{tmp}"], "is a directory, not a scene file"),
+    (["simulate", "{tmp}/good.json/scene.toml"], "scene.toml: no such file"),
+    (["simulate", "/dev/zero"], "/dev/zero: is not a regular file"),
+    (["simulate", "{good_scene}", "-o", "{tmp}/good.json"], "good.json: is a file, not a folder"),
+    (["simulate", "{good_scene}", "-o", "{tmp}/good.json/out"], "good.json: is a file"),
+    (["simulate"], "the following arguments are required: scene"),
 ]
 
 
@@ -286,7 +421,10 @@ BAD_ARGUMENTS = [
     ("argv", "expect"), BAD_ARGUMENTS, ids=lambda v: " ".join(v) if isinstance(v, list) else ""
 )
 def test_bad_arguments(argv, expect, tmp_path, capsys, monkeypatch):
-    argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    scenes = tmp_path.parent / f"{tmp_path.name}-scenes"
+    scenes.mkdir()
+    good_scene = _write(scenes / "good.toml", GOOD_SCENE)
+    argv = [a.replace("{tmp}", str(tmp_path)).replace("{good_scene}", good_scene) for a in argv]
     code, out, err = _run_in(tmp_path, argv, capsys, monkeypatch)
     _assert_one_error_line(code, out, err, expect)
 

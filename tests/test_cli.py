@@ -96,7 +96,7 @@ def test_bad_arguments_give_one_line_and_exit_2(capsys, argv, message):
 
 
 def test_demo_writes_report(capsys, tmp_path):
-    code, out, _ = run(capsys, "demo", "-o", str(tmp_path))
+    code, out, _ = run(capsys, "demo", "-o", str(tmp_path), "--duration", "0.5", "--no-gif")
     assert code == 0
     assert (tmp_path / "report.md").exists() and "| 20 |" in out
 
@@ -125,3 +125,40 @@ def test_crosscheck_all_skips_what_cannot_load_with_the_reason(capsys, monkeypat
     assert "crosscheck: skipped cassie: example-robot-data ships it only as SDF" in err
     assert "crosscheck: skipped iris: has no degree of freedom with a fixed base" in err
     assert "romeo: M(q) is singular" in out and "1/1 passed" in out
+
+
+def test_analyze_switches_to_the_linear_path_above_the_data_limit(capsys):
+    code, out, err = run(capsys, "analyze", "chain:450", "--json")
+    record = json.loads(out)
+    assert code == 0 and err.count("\n") == 1 and "using the O(n) DeNOC path" in err
+    assert record["method"] == "denoc-linear" and record["pivot_ratio_forward"] is None
+    assert record["diagonal_ratio"] == pytest.approx(450**3, rel=1e-12)
+    assert record["kappa"] / (4 * 450**4) == pytest.approx(0.975, abs=0.01)
+
+
+def test_analyze_linear_path_agrees_with_crba(capsys):
+    _, dense, _ = run(capsys, "analyze", "chain:30", "--json", "--random", "2", "--seed", "3")
+    _, linear, _ = run(
+        capsys,
+        "analyze",
+        "chain:30",
+        "--json",
+        "--random",
+        "2",
+        "--seed",
+        "3",
+        "--backend",
+        "denoc",
+    )
+    for a, b in zip(json.loads(dense), json.loads(linear), strict=True):
+        assert a["q"] == b["q"]
+        np.testing.assert_allclose(b["diagonal"], a["diagonal"], rtol=1e-12)
+        for key in ("kappa", "lambda_min", "lambda_max", "pivot_ratio_backward"):
+            assert b[key] == pytest.approx(a[key], rel=1e-8), key
+
+
+def test_analyze_metrics_limit_the_linear_work(capsys):
+    code, out, _ = run(capsys, "analyze", "chain:500", "--json", "--metrics", "diagonal_ratio")
+    record = json.loads(out)
+    assert code == 0 and record["kappa"] is None and record["pivot_ratio_backward"] is None
+    assert record["diagonal_ratio"] == pytest.approx(500**3, rel=1e-12)

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gimwatch.errors import InputError
+from gimwatch.results import prepare_directory
 
 __all__ = [
     "SECTIONS",
@@ -125,6 +126,7 @@ SECTIONS: dict[str, Section] = {
         Section(
             "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
         ),
+        Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain"),
     )
 }
 
@@ -189,8 +191,7 @@ def run_bench(
         reason = section_status(name)
         if reason:
             raise InputError(f"bench section {name!r}", "available", reason)
-    output = Path(output)
-    output.mkdir(parents=True, exist_ok=True)
+    output = prepare_directory(output)
     context = BenchContext(output=output, quick=quick, progress=progress, seed=seed)
     progress("measuring the environment (BLAS threads)")
     env = environment(quick=quick)

@@ -10,6 +10,8 @@ def table(headers: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
     """An aligned plain-text table; floats in 4 significant digits."""
 
     def cell(value: object) -> str:
+        if value is None:
+            return "-"
         return f"{value:.4g}" if isinstance(value, float) else str(value)
 
     cells = [[cell(v) for v in row] for row in rows]

@@ -3,16 +3,25 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from gimwatch.analysis import analyze_configuration
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.errors import InputError
 from gimwatch.results import to_json
-from gimwatch.robots import DATA_NV_LIMIT, load_robot, neutral_configuration, random_configurations
+from gimwatch.robots import (
+    DATA_NV_LIMIT,
+    load_robot,
+    neutral_configuration,
+    parse_chain_spec,
+    random_configurations,
+)
 
 NAME = "analyze"
 #: More configurations than this would print a table nobody reads; use ``survey``.
 MAX_RANDOM = 100_000
+#: The O(n) path's largest chain: diag, pivots and κ stay O(n) (about 1 kB per link).
+LINEAR_NV_LIMIT = 200_000
 HELP = "conditioning of M(q): kappa, diagonal ratio, pivot ratios, spectrum"
 
 
@@ -35,6 +44,69 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
     parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument(
+        "--backend",
+        choices=("auto", "crba", "denoc"),
+        default="auto",
+        help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; fixed "
+        f"base); auto: denoc above nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
+    )
+    parser.add_argument(
+        "--metrics",
+        help="comma-separated subset of kappa,diagonal_ratio,pivot_ratio_backward to compute "
+        "on the O(n) path (default: all three)",
+    )
+
+
+def _configurations(args: argparse.Namespace, nq: int, neutral, draw) -> list:
+    if args.random is not None:
+        return list(draw(args.random))
+    if args.q is not None:
+        if len(args.q) != nq:
+            raise InputError("--q", f"{nq} numbers for {args.robot}", len(args.q))
+        return [args.q]
+    return [neutral]
+
+
+def _run_linear(args: argparse.Namespace, chain, announce: bool) -> list:
+    """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
+    from gimwatch.denoc import DenocModel
+    from gimwatch.longchain import LINEAR_METRICS, analyze_linear, chain_configurations
+
+    if args.floating:
+        raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
+    metrics = LINEAR_METRICS if args.metrics is None else tuple(args.metrics.split(","))
+    if chain is not None:
+        if chain.n > LINEAR_NV_LIMIT:
+            raise InputError("the N of chain:N", f"at most {LINEAR_NV_LIMIT}", chain.n)
+        model, name = DenocModel.from_chain(chain), chain.name
+        configurations = _configurations(
+            args,
+            chain.n,
+            [0.0] * chain.n,
+            lambda k: chain_configurations(chain, k, seed=args.seed),
+        )
+    else:
+        robot = load_robot(args.robot)
+        model = DenocModel.from_urdf(
+            robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
+        )
+        name = robot.name
+        configurations = _configurations(
+            args,
+            robot.nq,
+            neutral_configuration(robot),
+            lambda k: random_configurations(robot, k, seed=args.seed),
+        )
+    if announce:
+        print(
+            f"gimwatch: {name} has nv = {model.nv} > {DATA_NV_LIMIT}: using the O(n) DeNOC "
+            "path (Pinocchio's Data would need GBs)",
+            file=sys.stderr,
+        )
+    return [
+        analyze_linear(model, q, name=name, metrics=metrics, seed=args.seed) for q in configurations
+    ]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,22 +115,30 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--q and --random", "used one at a time", "both")
     if args.random is not None and args.random > MAX_RANDOM:
         raise InputError("--random", f"at most {MAX_RANDOM}", args.random)
-    robot = load_robot(args.robot, floating=args.floating, max_nv=DATA_NV_LIMIT)
-    if args.random is not None:
-        configurations = random_configurations(robot, args.random, seed=args.seed)
-    elif args.q is not None:
-        if len(args.q) != robot.nq:
-            raise InputError("--q", f"{robot.nq} numbers for {robot.name}", len(args.q))
-        configurations = [args.q]
+    chain = parse_chain_spec(args.robot)
+    large = chain is not None and not args.floating and chain.n > DATA_NV_LIMIT
+    linear = args.backend == "denoc" or (args.backend == "auto" and large)
+    if args.metrics is not None and not linear:
+        raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
+    if linear:
+        results = _run_linear(args, chain, announce=args.backend == "auto")
     else:
-        configurations = [neutral_configuration(robot)]
-    data = robot.new_data()
-    results = [analyze_configuration(robot, q, data=data) for q in configurations]
+        robot = load_robot(args.robot, floating=args.floating, max_nv=DATA_NV_LIMIT)
+        configurations = _configurations(
+            args,
+            robot.nq,
+            neutral_configuration(robot),
+            lambda k: random_configurations(robot, k, seed=args.seed),
+        )
+        data = robot.new_data()
+        results = [analyze_configuration(robot, q, data=data) for q in configurations]
     if args.json:
         records = [r.to_dict() for r in results]
         print(to_json(records[0] if len(records) == 1 else records))
         return 0
-    print(f"{robot.name}: nv = {robot.nv}, {'floating' if robot.floating else 'fixed'} base")
+    first = results[0]
+    base = "floating" if args.floating else "fixed"
+    print(f"{first.robot}: nv = {first.nv}, {base} base, method {first.method}")
     headers = [
         "config",
         "kappa",

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from gimwatch.bench import SECTIONS, run_bench
+from gimwatch.cli._format import non_negative_int
 
 NAME = "bench"
 HELP = "what accuracy costs in time: tables, plots and a Markdown report"
@@ -22,7 +23,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("-o", "--output", default="benchmarks", help="output folder")
     parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run")
-    parser.add_argument("--seed", type=int, default=0, help="seed of every random draw")
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=0, help="seed of every random draw"
+    )
     parser.add_argument(
         "--readme", default=None, help="regenerate this README's 'What accuracy costs' block"
     )

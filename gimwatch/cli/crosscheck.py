@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.cli._format import positive_int, table
+from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.crosscheck import DEFAULT_TOLERANCE, CrossCheckResult, crosscheck_robot
 from gimwatch.errors import InputError, RobotError
 from gimwatch.results import to_json
@@ -24,7 +24,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
     parser.add_argument("robots", nargs="+", metavar="ROBOT", help="robot specs, or 'all'")
     parser.add_argument("--samples", type=positive_int, default=10, help="random states (10)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the random states")
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=0, help="seed of the random states"
+    )
     parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
     parser.add_argument(
         "--tolerance",

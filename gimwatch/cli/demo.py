@@ -11,6 +11,7 @@ from pathlib import Path
 
 from gimwatch.cli._progress import ProgressBar
 from gimwatch.demo import run_demo
+from gimwatch.errors import InputError
 
 NAME = "demo"
 HELP = "the main job: the paper's swinging 4-, 10- and 20-link chains, watched"
@@ -19,6 +20,10 @@ HELP = "the main job: the paper's swinging 4-, 10- and 20-link chains, watched"
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
     parser.add_argument("-o", "--output", default="demo-output", help="output folder")
+    parser.add_argument(
+        "--duration", type=float, default=5.0, help="simulated seconds per chain (default 5)"
+    )
+    parser.add_argument("--no-gif", action="store_true", help="skip the animation")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -32,7 +37,14 @@ def run(args: argparse.Namespace) -> int:
         return bars[-1]
 
     try:
-        report = run_demo(Path(args.output), progress=progress)
+        if not (args.duration > 0 and args.duration <= 60):
+            raise InputError("--duration", "in (0, 60] s", args.duration)
+        report = run_demo(
+            Path(args.output),
+            duration_s=args.duration,
+            animate=None if args.no_gif else 10,
+            progress=progress,
+        )
     finally:
         if bars:
             bars[-1].close()

@@ -7,8 +7,8 @@ import sys
 import time
 from pathlib import Path
 
-from gimwatch.cli._format import positive_int, table
-from gimwatch.errors import GimwatchError
+from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.errors import GimwatchError, OutputError
 from gimwatch.survey import run_survey
 from gimwatch.survey_report import write_survey
 
@@ -27,7 +27,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--samples", type=positive_int, default=200, metavar="K", help="random configurations"
     )
-    parser.add_argument("--seed", type=int, default=0, help="seed of the random configurations")
+    parser.add_argument(
+        "--seed", type=non_negative_int, default=0, help="seed of the random configurations"
+    )
     parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
     parser.add_argument(
         "--scheduler",
@@ -50,6 +52,9 @@ def run(args: argparse.Namespace) -> int:
     """Survey, write the files, print the summary table."""
     from tqdm import tqdm
 
+    output = Path(args.output)
+    if output.exists() and not output.is_dir():  # fail before the work, not after it
+        raise OutputError(str(output), "is a file, not a folder; give a folder name")
     start = time.perf_counter()
     # disable=None: the bar shows on a terminal only, so logs and pipes get no carriage returns
     with tqdm(
@@ -73,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     wall_time_s = time.perf_counter() - start
     if not result.robots and result.failures and not result.interrupted:
         raise GimwatchError(result.failures[0].reason)  # nothing to report: nothing written
-    report = write_survey(result, Path(args.output), wall_time_s=wall_time_s)
+    report = write_survey(result, output, wall_time_s=wall_time_s)
     rows = [
         [
             r.name,

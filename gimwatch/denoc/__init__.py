@@ -1,13 +1,35 @@
-"""DeNOC: an independent GIM and dynamics from the URDF, with numpy and yourdfpy only.
+"""DeNOC: an independent GIM and dynamics from the URDF, with numpy, numba and yourdfpy only.
 
 Shah & Saha (2013) write the GIM with the Decoupled Natural Orthogonal Complement (DeNOC)
 matrices: twist-propagation matrices A, motion-propagation vectors p and composite mass
 matrices M̃ (Eqs. 11–13). This package implements them, Saha's recursive inverse dynamics
 and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can check each other
 (``gimwatch crosscheck``). It never imports pinocchio.
+
+* :class:`DenocModel` — any URDF tree, fixed or floating base, in Pinocchio's coordinate
+  layout; the recursions batched per tree depth in NumPy (:mod:`.recursions`).
+* :class:`LinearTimeModel` — fixed-base trees, the same recursions compiled with numba
+  (:mod:`.compiled`): O(n) time and memory, for chains of 10^4–10^5 links, with the
+  matrix-free condition number :func:`matrix_free_kappa`.
 """
 
+from gimwatch.denoc.chain import chain_body_tree
+from gimwatch.denoc.linear import (
+    ConfigurationState,
+    LinearTimeModel,
+    MatrixFreeKappa,
+    matrix_free_kappa,
+)
 from gimwatch.denoc.model import DenocModel
 from gimwatch.denoc.tree import BodyTree, read_body_tree
 
-__all__ = ["BodyTree", "DenocModel", "read_body_tree"]
+__all__ = [
+    "BodyTree",
+    "ConfigurationState",
+    "DenocModel",
+    "LinearTimeModel",
+    "MatrixFreeKappa",
+    "chain_body_tree",
+    "matrix_free_kappa",
+    "read_body_tree",
+]

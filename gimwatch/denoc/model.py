@@ -14,7 +14,10 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from gimwatch.chains import ChainSpec
 from gimwatch.denoc import recursions
+from gimwatch.denoc.chain import chain_body_tree
+from gimwatch.denoc.linear import ConfigurationState, LinearTimeModel
 from gimwatch.denoc.tree import FREE_FLYER_NAME, BodyTree, read_body_tree
 from gimwatch.errors import ConditioningError, InputError
 
@@ -35,8 +38,12 @@ def _vector(name: str, value: npt.ArrayLike, size: int) -> np.ndarray:
 class DenocModel:
     """A robot's body tree and the index maps between its coordinates and DeNOC's.
 
-    Build it with :meth:`from_urdf`. Internally bodies are numbered parents-first; the
-    maps below translate to and from the public (``joint_names``) order.
+    Build it with :meth:`from_urdf` (or :meth:`from_chain`). Internally bodies are numbered
+    parents-first; the maps below translate to and from the public (``joint_names``) order.
+
+    With a fixed base, the O(n) operations (diagonal, inverse and forward dynamics, pivots,
+    M·x, M⁻¹·x, energy) run the compiled recursions of :class:`~.linear.LinearTimeModel`;
+    the dense GIM and floating bases use the per-depth NumPy recursions of :mod:`.recursions`.
     """
 
     def __init__(self, tree: BodyTree, joint_order: Sequence[str] | None = None) -> None:
@@ -97,6 +104,56 @@ class DenocModel:
         """
         return cls(read_body_tree(xml_text, floating=floating, source=source), joint_order)
 
+    @classmethod
+    def from_chain(cls, spec: ChainSpec) -> DenocModel:
+        """The model of a generated rod chain, built from its spec (no URDF text parsed)."""
+        return cls(chain_body_tree(spec))
+
+    @property
+    def linear(self) -> LinearTimeModel | None:
+        """The compiled O(n) model (None with a floating base)."""
+        if self.tree.floating:
+            return None
+        if not hasattr(self, "_linear"):
+            self._linear = LinearTimeModel(self.tree)
+        return self._linear
+
+    def state(self, q: npt.ArrayLike) -> ConfigurationState:
+        """The compiled model's state at ``q`` (fixed base only), for repeated O(n) products.
+
+        Its vectors are in internal (body) order: use :meth:`to_internal` and
+        :meth:`to_public` to translate.
+        """
+        if self.linear is None:
+            raise InputError("the model", "fixed-base for the O(n) state", "a floating base")
+        q = _vector("q", q, self.nq)
+        first = q[self._q_index[1:]]
+        second = q[np.minimum(self._q_index[1:] + 1, self.nq - 1)]
+        # continuous joints hold (cos θ, sin θ); the compiled kernels take θ
+        angle = np.where(self.tree.kind[1:] == 2, np.arctan2(second, first), first)
+        return self.linear.at(angle)
+
+    def to_internal(self, name: str, x: npt.ArrayLike) -> np.ndarray:
+        """A velocity-space vector in public order, checked, in internal (body) order."""
+        return _vector(name, x, self.nv)[self._v_index]
+
+    def to_public(self, x: np.ndarray) -> np.ndarray:
+        """A velocity-space vector in internal order, in public (``joint_names``) order."""
+        out = np.empty(self.nv)
+        out[self._v_index] = x
+        return out
+
+    def energy(
+        self, q: npt.ArrayLike, v: npt.ArrayLike, *, gravity: npt.ArrayLike = _GRAVITY
+    ) -> tuple[float, float]:
+        """(kinetic ½ vᵀ M v, gravity potential -Σ m_i g·c_i) in J; fixed base only, O(n)."""
+        state = self.state(q)
+        velocity = self.to_internal("v", v)
+        kinetic = 0.5 * float(velocity @ state.matvec(velocity))
+        centres = state.origin + state.com_offset
+        potential = -float(self.linear._mass @ (centres @ _vector("gravity", gravity, 3)))
+        return kinetic, potential
+
     def permutation_to(self, order: Sequence[str]) -> np.ndarray:
         """Index array ``perm`` (nv,) with ``x_in_order = x[perm]`` for velocity-space vectors.
 
@@ -120,14 +177,6 @@ class DenocModel:
         root = q[self._root_q : self._root_q + 7] if tree.floating else None
         return recursions.kinematics(tree, cos, sin, displacement, root)
 
-    def _to_internal(self, name: str, x: npt.ArrayLike) -> np.ndarray:
-        return _vector(name, x, self.nv)[self._v_index]
-
-    def _to_public(self, x: np.ndarray) -> np.ndarray:
-        out = np.empty(self.nv)
-        out[self._v_index] = x
-        return out
-
     def _split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Internal vector → (per-body values (N,), root's 6 values)."""
         start = 6 if self.tree.floating else 0
@@ -145,7 +194,9 @@ class DenocModel:
 
     def gim_diagonal(self, q: npt.ArrayLike) -> np.ndarray:
         """Diag M(q) = (p_iᵀ M̃_i p_i) in O(n) (Shah & Saha 2013, Eq. 13)."""
-        return self._to_public(recursions.gim_diagonal(self.tree, self._kinematics(q)))
+        if self.linear is not None:
+            return self.to_public(self.state(q).diagonal())
+        return self.to_public(recursions.gim_diagonal(self.tree, self._kinematics(q)))
 
     def composite_mass_matrices(self, q: npt.ArrayLike) -> dict[str, np.ndarray]:
         """M̃_i (6×6, ``[ω; v]`` order, about the body origin, world axes) per joint (Eq. 12).
@@ -167,12 +218,19 @@ class DenocModel:
         gravity: npt.ArrayLike = _GRAVITY,
     ) -> np.ndarray:
         """τ = M(q) a + h(q, v) by the DeNOC recursions (Saha's τ = Nᵀ w), N·m or N."""
+        if self.linear is not None:
+            tau = self.state(q).inverse_dynamics(
+                self.to_internal("v", v),
+                self.to_internal("a", a),
+                gravity=_vector("gravity", gravity, 3),
+            )
+            return self.to_public(tau)
         kin = self._kinematics(q)
-        qd, root_v = self._split(self._to_internal("v", v))
-        qdd, root_a = self._split(self._to_internal("a", a))
+        qd, root_v = self._split(self.to_internal("v", v))
+        qdd, root_a = self._split(self.to_internal("a", a))
         g = _vector("gravity", gravity, 3)
         tau = recursions.inverse_dynamics(self.tree, kin, qd, qdd, root_v, root_a, g)
-        return self._to_public(tau)
+        return self.to_public(tau)
 
     def forward_dynamics(
         self,
@@ -183,14 +241,23 @@ class DenocModel:
         gravity: npt.ArrayLike = _GRAVITY,
     ) -> np.ndarray:
         """q̈ = M(q)⁻¹ (τ − h(q, v)) by Saha's O(n) UDUᵀ recursion from the tips."""
+        if self.linear is not None:
+            state = self.state(q)
+            self._check_pivots(state.pivots())
+            qdd = state.forward_dynamics(
+                self.to_internal("v", v),
+                self.to_internal("tau", tau),
+                gravity=_vector("gravity", gravity, 3),
+            )
+            return self.to_public(qdd)
         kin = self._kinematics(q)
-        qd, root_v = self._split(self._to_internal("v", v))
-        torque = self._to_internal("tau", tau)
+        qd, root_v = self._split(self.to_internal("v", v))
+        torque = self.to_internal("tau", tau)
         g = _vector("gravity", gravity, 3)
         with np.errstate(divide="ignore", invalid="ignore"):
             qdd, pivots = recursions.forward_dynamics(self.tree, kin, qd, torque, root_v, g)
         self._check_pivots(pivots)
-        return self._to_public(qdd)
+        return self.to_public(qdd)
 
     def _check_pivots(self, pivots: np.ndarray) -> None:
         """Raise when an elimination pivot is not positive: M(q) is singular there."""
@@ -220,8 +287,10 @@ class DenocModel:
         articulated block. A joint that moves no mass has pivot 0 (M(q) is singular); the
         pivots eliminated after it are then NaN.
         """
+        if self.linear is not None:
+            return self.to_public(self.state(q).pivots())
         with np.errstate(divide="ignore", invalid="ignore"):
             _, pivots = recursions.forward_dynamics(
                 self.tree, self._kinematics(q), None, None, None, np.zeros(3)
             )
-        return self._to_public(pivots)
+        return self.to_public(pivots)

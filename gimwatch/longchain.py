@@ -1,0 +1,97 @@
+"""Conditioning of long chains by the O(n) DeNOC path: no Pinocchio Data, no dense M.
+
+Pinocchio's Data for an n-joint model needs memory growing as n³ (about 1.8 GB at n = 300,
+8 GB at 500), and the dense GIM n². Above :data:`~gimwatch.robots.DATA_NV_LIMIT` joints
+(or on request) gimwatch analyses fixed-base chains and trees with the compiled DeNOC
+recursions instead: diag M and δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each);
+the backward (UDUᵀ) pivots from the articulated-body factor. The forward (LDLᵀ) pivots and
+the full spectrum need M itself and are not computed on this path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection
+
+import numpy as np
+import numpy.typing as npt
+
+from gimwatch.analysis import GimAnalysis
+from gimwatch.chains import ChainSpec
+from gimwatch.denoc import DenocModel, matrix_free_kappa
+from gimwatch.errors import ConditioningError, InputError
+
+__all__ = ["LINEAR_METRICS", "analyze_linear", "chain_configurations"]
+
+#: What the O(n) path can compute.
+LINEAR_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_backward")
+
+
+def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np.ndarray:
+    """Random configurations of a generated chain, shape ``(count, n)``, within its limits.
+
+    Draws exactly what :func:`gimwatch.robots.random_configurations` draws for the same
+    chain and seed (one uniform number per joint and configuration, joint by joint), without
+    building a Pinocchio model.
+    """
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+        raise InputError("count", "a positive integer", count)
+    lengths = np.asarray(spec.lengths_m)
+    prismatic = np.array([kind == "prismatic" for kind in spec.joint_types])
+    half_range = np.where(prismatic, lengths / 2, np.pi)
+    draws = np.random.default_rng(seed).random((spec.n, count))
+    return (-half_range[:, None] + 2 * half_range[:, None] * draws).T
+
+
+def analyze_linear(
+    model: DenocModel,
+    q: npt.ArrayLike,
+    *,
+    name: str,
+    metrics: Collection[str] = LINEAR_METRICS,
+    seed: int = 0,
+    rtol: float = 1e-9,
+) -> GimAnalysis:
+    """Conditioning of M(q) with O(n) time and memory (fixed base only).
+
+    Args:
+        model: The DeNOC model (fixed base).
+        q: Configuration in the model's layout.
+        name: Robot name for the record.
+        metrics: Which of :data:`LINEAR_METRICS` to compute; the others are None.
+        seed: Seed of the Lanczos start vector.
+        rtol: Relative change of the Ritz values at which Lanczos stops.
+    """
+    unknown = sorted(set(metrics) - set(LINEAR_METRICS))
+    if unknown:
+        raise InputError("metrics", f"among {LINEAR_METRICS} on the O(n) path", unknown)
+    state = model.state(q)
+    diag = model.to_public(state.diagonal())
+    massless = [model.joint_names[k] for k in np.flatnonzero(~(diag > 0))]
+    if massless:
+        raise ConditioningError(
+            f"M(q) of {name} is singular: {len(massless)} coordinate(s) move no mass "
+            f"({', '.join(massless[:4])})"
+        )
+    kappa = lambda_min = lambda_max = backward = None
+    if "kappa" in metrics:
+        found = matrix_free_kappa(state, seed=seed, rtol=rtol)
+        kappa, lambda_min, lambda_max = found.kappa, found.lambda_min, found.lambda_max
+    if "pivot_ratio_backward" in metrics:
+        pivots = state.pivots()
+        backward = float(pivots.max() / pivots.min())
+    return GimAnalysis(
+        robot=name,
+        nv=model.nv,
+        q=tuple(float(x) for x in np.asarray(q, dtype=float)),
+        kappa=kappa,
+        diagonal_ratio=float(diag.max() / diag.min()),
+        pivot_ratio_forward=None,
+        pivot_ratio_backward=backward,
+        lambda_min=lambda_min,
+        lambda_max=lambda_max,
+        eigenvalues=() if kappa is None else (lambda_min, lambda_max),
+        diagonal=tuple(float(x) for x in diag),
+        max_diagonal_dof=model.joint_names[int(np.argmax(diag))],
+        min_diagonal_dof=model.joint_names[int(np.argmin(diag))],
+        method="denoc-linear",
+    )

@@ -1,0 +1,180 @@
+"""The O(n) DeNOC path: compiled recursions, matrix-free κ, long-chain analysis and simulation.
+
+References: Pinocchio (CRBA, RNEA, ABA, Cholesky), the URDF read by yourdfpy, the mpmath
+planar-chain reference, and the straight-chain closed forms δ = n³ and κ ≈ 4n⁴.
+"""
+
+import mpmath
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from gimwatch.chains import chain_spec, generate_chain_urdf
+from gimwatch.denoc import DenocModel, chain_body_tree, matrix_free_kappa, read_body_tree
+from gimwatch.errors import BackendWarning
+from gimwatch.longchain import analyze_linear, chain_configurations
+from gimwatch.reference import PlanarChainReference
+from gimwatch.robots import Robot, load_robot, random_configurations
+from gimwatch.scene import parse_scene
+from gimwatch.simulate import run_scene
+
+SPECS = {
+    "paper": chain_spec(12),
+    "spatial-mixed": chain_spec(
+        12, axes="spatial", radius_m=0.04, joint_types=["revolute", "prismatic", "revolute"] * 4
+    ),
+    "tapered": chain_spec(
+        12, mass_kg=2.2 * 0.3 ** np.arange(12), length_m=0.7 ** np.arange(12), axes="spatial"
+    ),
+}
+
+
+@pytest.mark.parametrize("name", SPECS)
+def test_chain_body_tree_equals_the_urdf_read_by_yourdfpy(name):
+    spec = SPECS[name]
+    direct, read = chain_body_tree(spec), read_body_tree(generate_chain_urdf(spec))
+    assert direct.joint_names == read.joint_names
+    for field in (
+        "parent",
+        "kind",
+        "placement_rotation",
+        "placement_translation",
+        "axis",
+        "mass",
+        "com",
+        "inertia",
+    ):
+        np.testing.assert_allclose(getattr(direct, field), getattr(read, field), atol=1e-15)
+
+
+@pytest.mark.parametrize("name", SPECS)
+def test_compiled_recursions_match_pinocchio(name):
+    spec = SPECS[name]
+    model = pin.buildModelFromXML(generate_chain_urdf(spec))
+    model.gravity = pin.Motion(np.array([0.3, -9.81, 1.2]), np.zeros(3))
+    data = model.createData()
+    denoc = DenocModel.from_chain(spec)
+    rng = np.random.default_rng(7)
+    for q in chain_configurations(spec, 3, seed=1):
+        v, a, tau = rng.standard_normal((3, spec.n))
+        g = (0.3, -9.81, 1.2)
+        M = pin.crba(model, data, q).copy()
+        state = denoc.state(q)
+        np.testing.assert_allclose(state.dense(), M, rtol=0, atol=1e-13 * np.abs(M).max())
+        np.testing.assert_allclose(denoc.gim_diagonal(q), np.diag(M), rtol=1e-12)
+        tau_ref = pin.rnea(model, data, q, v, a)
+        np.testing.assert_allclose(
+            denoc.inverse_dynamics(q, v, a, gravity=g),
+            tau_ref,
+            rtol=0,
+            atol=1e-11 * np.abs(tau_ref).max(),
+        )
+        qdd_ref = pin.aba(model, data, q, v, tau)
+        qdd = denoc.forward_dynamics(q, v, tau, gravity=g)
+        assert np.linalg.norm(qdd - qdd_ref) <= 1e-9 * np.linalg.norm(qdd_ref)
+        pin.crba(model, data, q)
+        pin.cholesky.decompose(model, data)
+        np.testing.assert_allclose(denoc.forward_dynamics_pivots(q), data.D, rtol=1e-9)
+        kinetic, potential = denoc.energy(q, v, gravity=g)
+        assert kinetic == pytest.approx(pin.computeKineticEnergy(model, data, q, v), rel=1e-12)
+        assert potential == pytest.approx(
+            pin.computePotentialEnergy(model, data, q), rel=1e-12, abs=1e-12
+        )
+
+
+def test_chain_configurations_are_those_of_random_configurations():
+    spec = chain_spec(25, joint_types=["revolute", "prismatic"] * 12 + ["revolute"])
+    robot = Robot(
+        name="c",
+        spec="c",
+        model=pin.buildModelFromXML(generate_chain_urdf(spec)),
+        urdf_xml="",
+        source="<test>",
+    )
+    for count in (1, 4):
+        np.testing.assert_array_equal(
+            chain_configurations(spec, count, seed=9), random_configurations(robot, count, seed=9)
+        )
+
+
+@pytest.mark.parametrize("n", [5, 40, 200])
+def test_matrix_free_kappa_matches_the_dense_eigensolver(n):
+    state = DenocModel.from_chain(chain_spec(n)).state(
+        chain_configurations(chain_spec(n), 1, seed=n)[0]
+    )
+    values = np.linalg.eigvalsh(state.dense())
+    found = matrix_free_kappa(state, seed=0)
+    assert found.kappa == pytest.approx(values[-1] / values[0], rel=1e-7)
+    assert found.lambda_min == pytest.approx(values[0], rel=1e-7)
+
+
+def test_matrix_free_kappa_matches_mpmath_at_50_digits():
+    spec = chain_spec(8)
+    q = np.linspace(-0.9, 0.7, 8)
+    with mpmath.workdps(50):
+        M = PlanarChainReference(spec).gim(q)
+        values = sorted(mpmath.eigsy(M, eigvals_only=True))
+        exact = float(values[-1] / values[0])
+    found = matrix_free_kappa(DenocModel.from_chain(spec).state(q), seed=3, rtol=1e-12)
+    assert found.kappa == pytest.approx(exact, rel=1e-9)
+
+
+@pytest.mark.parametrize("n", [1_000, 5_000])
+def test_long_straight_chains_follow_the_closed_forms(n):
+    record = analyze_linear(DenocModel.from_chain(chain_spec(n)), np.zeros(n), name="c")
+    assert record.diagonal_ratio == pytest.approx(n**3, rel=1e-10)
+    # κ/4n⁴ of the straight chain decreases slowly towards ~0.97 (0.973 at n = 1,000)
+    assert 0.95 <= record.kappa / (4 * n**4) <= 1.1
+    assert record.pivot_ratio_backward == pytest.approx(1.8660254037844386, rel=1e-9)
+
+
+def test_hundred_thousand_links_diagonal_ratio_without_kappa():
+    n = 100_000
+    record = analyze_linear(
+        DenocModel.from_chain(chain_spec(n)), np.zeros(n), name="c", metrics=("diagonal_ratio",)
+    )
+    assert record.kappa is None and record.diagonal_ratio == pytest.approx(n**3, rel=1e-9)
+
+
+def _swing(robot, backend, duration=0.2, metrics=("diagonal_ratio",)):
+    table = {
+        "robot": robot,
+        "duration": duration,
+        "sample": duration / 4,
+        "effects": {"gravity": {"vector": [0.0, -9.81, 0.0]}},
+        "integrator": {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10},
+        "dynamics": {"backend": backend},
+        "watch": {"metrics": list(metrics)},
+    }
+    return run_scene(parse_scene(table, source="t.toml"))
+
+
+def test_denoc_and_aba_simulations_agree_on_a_hundred_links():
+    aba, denoc = _swing("chain:100", "aba"), _swing("chain:100", "denoc")
+    np.testing.assert_allclose(denoc.q, aba.q, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(denoc.energy, aba.energy, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(
+        denoc.watch["watch_diagonal_ratio"], aba.watch["watch_diagonal_ratio"], rtol=1e-12
+    )
+
+
+def test_long_chain_simulation_switches_to_denoc_and_builds_no_data(monkeypatch):
+    def refuse(self):
+        raise AssertionError("a Pinocchio Data was built")
+
+    monkeypatch.setattr(Robot, "new_data", refuse)
+    with pytest.warns(BackendWarning, match="using the O\\(n\\) denoc backend instead of aba"):
+        run = _swing("chain:450", "aba", duration=0.02)
+    assert run.t.size == 5 and np.all(np.isfinite(run.q))
+    assert run.watch["watch_diagonal_ratio"][0] == pytest.approx(450**3, rel=1e-12)
+    assert abs(run.energy[-1] - run.energy[0]) <= 1e-8 * abs(run.energy).max() + 1e-8
+
+
+def test_floating_base_long_chain_keeps_the_numpy_recursions():
+    robot = load_robot("chain:6", floating=True)
+    denoc = DenocModel.from_urdf(robot.urdf_xml, floating=True, joint_order=robot.joint_names)
+    assert denoc.linear is None
+    q = random_configurations(robot, 1, seed=2)[0]
+    np.testing.assert_allclose(
+        denoc.gim_diagonal(q), np.diag(pin.crba(robot.model, robot.new_data(), q)), rtol=1e-12
+    )
