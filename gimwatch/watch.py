@@ -104,10 +104,13 @@ class KappaLanczos(Metric):
 
     def __init__(self) -> None:
         self.start: tuple[np.ndarray, np.ndarray] | None = None
+        self.data = None
 
     def __call__(self, state):
+        if self.data is None:  # RNEA/ABA need a Pinocchio Data, even when M comes from DeNOC
+            self.data = state.robot.new_data() if state.data is None else state.data
         result = kappa_matrix_free(
-            state.robot, state.q, data=state.data, seed=0, tol=self.TOL, start=self.start
+            state.robot, state.q, data=self.data, seed=0, tol=self.TOL, start=self.start
         )
         self.start = (result.vector_max, result.vector_min)
         return result.kappa

@@ -106,9 +106,9 @@ def run(context: BenchContext) -> SectionResult:
     fd = {r["n"]: r["ratio"] for r in table.rows if r["quantity"] == "forward_dynamics"}
     text = [
         "Rod chains `chain:n`, one seeded random state; median µs per call. DeNOC is "
-        "gimwatch's NumPy implementation (one Python step per tree depth, no Pinocchio); "
-        "Pinocchio is C++. DeNOC is the independent cross-check, not the fast path: use "
-        "`aba` for simulation.",
+        "gimwatch's own implementation, no Pinocchio: the O(n) operations (diagonal, inverse "
+        "and forward dynamics) run its compiled recursions for fixed bases, the dense GIM its "
+        "per-depth NumPy recursions; Pinocchio is C++.",
         "",
         markdown_table(table.rows, columns),
     ]

@@ -52,6 +52,7 @@ with open("/proc/self/status") as status:
 print(json.dumps({"code": code, "wall_s": wall, "peak_rss_mb": peak_kb / 1024}))
 """
 
+
 def _step_table(context: BenchContext, sizes) -> Table:
     table = Table("longchain_step", ("n", "method", "median_s", "ratio_to_aba"))
     rng = np.random.default_rng(context.seed)
