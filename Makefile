@@ -25,7 +25,7 @@ test: setup
 # Regenerates benchmarks/survey/ and the README table "Does the diagonal ratio track κ on real robots?"
 .PHONY: survey
 survey: setup
-	$(VENV)/bin/gimwatch survey all --samples 200 --seed 0 -o benchmarks/survey
+	$(VENV)/bin/gimwatch survey all --samples 200 --seed 0 --trajectory -o benchmarks/survey
 	$(PY) benchmarks/survey/update_readme.py
 
 # Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the README's

@@ -38,6 +38,7 @@ from gimwatch.matrix_free import (
     kappa_matrix_free,
 )
 from gimwatch.reference import PlanarChainReference, planar_reference
+from gimwatch.reference_tree import TreeReference
 from gimwatch.robots import (
     Robot,
     example_robot_names,
@@ -48,6 +49,7 @@ from gimwatch.robots import (
 from gimwatch.scene import Scene, load_scene, parse_scene
 from gimwatch.simresults import summarize, write_simulation
 from gimwatch.simulate import Simulation, Trajectory, run_scene
+from gimwatch.stress import StressResult, run_stress
 from gimwatch.survey import RobotFailure, RobotSurvey, SurveyResult, run_survey
 from gimwatch.survey_report import write_survey
 from gimwatch.watch import Watch, estimator_quality
@@ -72,8 +74,10 @@ __all__ = [
     "SceneError",
     "Simulation",
     "SimulationError",
+    "StressResult",
     "SurveyResult",
     "Trajectory",
+    "TreeReference",
     "URDFError",
     "Watch",
     "__version__",
@@ -103,6 +107,7 @@ __all__ = [
     "planar_reference",
     "random_configurations",
     "run_scene",
+    "run_stress",
     "run_survey",
     "summarize",
     "udut_pivots",

@@ -227,6 +227,12 @@ def _too_large(spec: str, nv: int) -> RobotError:
     )
 
 
+def _too_deep(spec: str) -> RobotError:
+    return RobotError(
+        spec, f"Pinocchio's URDF parser reads at most {MAX_TREE_DEPTH} links in a chain"
+    )
+
+
 def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
     """The :class:`ChainSpec` of a ``chain:N`` specification, or None for other specs."""
     match = _CHAIN_SPEC.match(str(spec))
@@ -264,9 +270,7 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
         if max_nv is not None and n + 6 * floating > max_nv:
             raise _too_large(text, n + 6 * floating)
         if n > MAX_TREE_DEPTH:
-            raise RobotError(
-                text, f"Pinocchio's URDF parser reads at most {MAX_TREE_DEPTH} links in a chain"
-            )
+            raise _too_deep(text)
         xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
     elif text in _example_robots():
         path = _example_robot_urdf(text)

@@ -52,9 +52,8 @@ METRIC_NAMES = (
     "eigenvalues",
     "diagonal",
 )
-#: What to do when the alarm metric crosses its threshold; issue 6 adds "tighten" and
-#: "switch-backend".
-ON_ALARM_ACTIONS = ("warn", "stop")
+#: What to do when the alarm metric crosses its threshold (see gimwatch.simulate).
+ON_ALARM_ACTIONS = ("warn", "stop", "tighten", "switch-backend")
 TORQUE_LAWS = ("constant", "sinusoid", "pd")
 
 #: Each effect's keys: name -> (required keys, optional keys).

@@ -17,7 +17,6 @@ result is replaced only by a complete one.
 from __future__ import annotations
 
 import os
-import platform
 import shutil
 import tempfile
 from dataclasses import asdict
@@ -26,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from gimwatch._version import __version__
+from gimwatch.environment import versions
 from gimwatch.errors import OutputError
 from gimwatch.results import (
     prepare_directory,
@@ -38,22 +37,6 @@ from gimwatch.simulate import Trajectory
 from gimwatch.watch import estimator_quality
 
 __all__ = ["summarize", "versions", "write_simulation"]
-
-
-def versions() -> dict[str, str]:
-    """Versions of Python and of the libraries a result depends on."""
-    import matplotlib
-    import pinocchio
-    import scipy
-
-    return {
-        "gimwatch": __version__,
-        "python": platform.python_version(),
-        "pinocchio": pinocchio.__version__,
-        "numpy": np.__version__,
-        "scipy": scipy.__version__,
-        "matplotlib": matplotlib.__version__,
-    }
 
 
 def summarize(trajectory: Trajectory) -> dict[str, Any]:
@@ -77,7 +60,7 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
         "scene": {"source": scene.source, **scene.raw},
         "robot": trajectory.robot,
         "effects": list(trajectory.effects),
-        "backend": scene.backend,
+        "backend": trajectory.backend or scene.backend,
         "integrator": asdict(scene.integrator),
         "versions": versions(),
         "status": trajectory.status,
@@ -94,6 +77,7 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
         "alpha": trajectory.alpha,
         "estimator_quality": quality,
         "alarms": [asdict(alarm) for alarm in trajectory.alarms],
+        "actions": list(trajectory.actions),
     }
 
 

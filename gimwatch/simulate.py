@@ -10,6 +10,18 @@ Integrators: SciPy's ``RK45``, ``DOP853``, ``Radau`` and ``LSODA`` (adaptive, ``
 progress callback runs between steps and Ctrl-C keeps what was computed; and fixed-step
 ``RK4`` and semi-implicit (symplectic) Euler with step ``dt``. The watch and the energy are
 evaluated at the sample times only, never inside the right-hand side.
+
+When the watch's alarm metric is above its threshold, ``watch.on_alarm`` acts (issue 6):
+``warn`` records the alarm, ``stop`` ends the run cleanly, ``tighten`` lowers the adaptive
+integrator's tolerances in proportion to the estimate,
+``rtol ← max(rtol₀ · threshold / estimate, RTOL_FLOOR)`` (atol by the same factor), at each
+sample where the metric is above the threshold and the estimate is a new maximum (never
+loosened again), and
+``switch-backend`` moves the dynamics to :data:`MOST_ACCURATE_BACKEND`.
+
+Divergence: a non-finite state or acceleration, or a step size that collapses below
+``MIN_STEP_FRACTION · duration``, stops the run with status ``diverged`` and a message giving
+the time and the cause; the samples up to that point are kept.
 """
 
 from __future__ import annotations
@@ -26,11 +38,28 @@ from gimwatch.backends import make_backend
 from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.effects import build_effects, joint_vector
 from gimwatch.errors import GimwatchError, SceneError, SimulationError
-from gimwatch.robots import DATA_NV_LIMIT, Robot, _too_large, load_robot, neutral_configuration
+from gimwatch.robots import (
+    DATA_NV_LIMIT,
+    MAX_TREE_DEPTH,
+    Robot,
+    _too_deep,
+    _too_large,
+    load_robot,
+    neutral_configuration,
+)
 from gimwatch.scene import Scene
 from gimwatch.watch import Alarm, Watch
 
-__all__ = ["STATUSES", "Simulation", "Trajectory", "load_scene_robot", "run_scene"]
+__all__ = [
+    "MIN_STEP_FRACTION",
+    "MOST_ACCURATE_BACKEND",
+    "RTOL_FLOOR",
+    "STATUSES",
+    "Simulation",
+    "Trajectory",
+    "load_scene_robot",
+    "run_scene",
+]
 
 STATUSES = ("completed", "interrupted", "stopped-on-alarm", "diverged", "failed")
 _SCIPY = {
@@ -39,6 +68,24 @@ _SCIPY = {
     "Radau": scipy.integrate.Radau,
     "LSODA": scipy.integrate.LSODA,
 }
+#: The backend with the smallest q̈ error on the stress suite's hard cases (ABA stays within
+#: ~1e-14 of the mpmath reference up to κ ~ 1e11 while CRBA + Cholesky scales with κ·eps);
+#: ``on_alarm = "switch-backend"`` moves to it.
+MOST_ACCURATE_BACKEND = "aba"
+#: ``tighten`` never asks for a relative tolerance below this (SciPy clamps at 100·eps).
+RTOL_FLOOR = 1e-13
+#: Methods whose tolerances can change between steps (LSODA keeps them in Fortran state).
+_TIGHTENABLE = ("RK45", "DOP853", "Radau")
+#: A step shorter than this fraction of the duration is a collapse (the run diverges).
+MIN_STEP_FRACTION = 1e-12
+
+
+class _Diverged(Exception):
+    """Raised inside the right-hand side: the dynamics returned non-finite values."""
+
+    def __init__(self, time_s: float, cause: str) -> None:
+        super().__init__(cause)
+        self.time_s, self.cause = time_s, cause
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,6 +103,9 @@ class Trajectory:
         watch: Watch series (``watch_t`` and ``watch_<metric>``), possibly empty.
         alpha: α of the scaled diagonal ratio when watched.
         alarms: Alarms raised, in time order.
+        actions: What ``on_alarm`` did (tolerances tightened, backend switched), in time order.
+        backend: The dynamics backend the run ended on (the scene's, unless the robot was too
+            large for Pinocchio's Data or ``switch-backend`` acted).
         status: One of :data:`STATUSES`.
         message: Why the run stopped early ("" when completed).
         steps: Integrator steps taken.
@@ -80,6 +130,8 @@ class Trajectory:
     wall_time_s: float
     effects: tuple[str, ...] = field(default=())
     kinetic_peak: float = 0.0
+    actions: tuple[str, ...] = field(default=())
+    backend: str = ""
 
     @property
     def conservative(self) -> bool:
@@ -108,8 +160,12 @@ def _chain_robot(params: dict, floating: bool) -> Robot:
     from gimwatch.robots import _build_model
 
     options = {k: v for k, v in params.items() if k != "n"}
-    if params["n"] + 6 * floating > DATA_NV_LIMIT:  # checked before any URDF is generated
-        raise _too_large(f"chain:{params['n']}", params["n"] + 6 * floating)
+    # checked before any URDF is generated: a floating base needs Pinocchio's Data (memory
+    # ∝ nv³); a fixed one runs on the O(n) denoc backend, up to the URDF parser's depth
+    if floating and params["n"] + 6 > DATA_NV_LIMIT:
+        raise _too_large(f"chain:{params['n']}", params["n"] + 6)
+    if params["n"] > MAX_TREE_DEPTH:
+        raise _too_deep(f"chain:{params['n']}")
     spec = chain_spec(params["n"], **options)
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
@@ -122,7 +178,10 @@ def load_scene_robot(scene: Scene) -> Robot:
     try:
         if scene.robot.chain is not None:
             return _chain_robot(scene.robot.chain, scene.robot.floating)
-        return load_robot(scene.robot.spec, floating=scene.robot.floating, max_nv=DATA_NV_LIMIT)
+        floating = scene.robot.floating
+        return load_robot(
+            scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None
+        )
     except SceneError:
         raise
     except GimwatchError as exc:
@@ -136,9 +195,9 @@ class Simulation:
     nothing is integrated until :meth:`run`.
     """
 
-    def __init__(self, scene: Scene) -> None:
+    def __init__(self, scene: Scene, *, robot: Robot | None = None) -> None:
         self.scene = scene
-        robot = self.robot = load_scene_robot(scene)
+        robot = self.robot = load_scene_robot(scene) if robot is None else robot
         self.effects = build_effects(robot, scene.effects, source=scene.source)
         gravity = next((e.vector for e in self.effects if e.name == "gravity"), None)
         self.gravity = gravity
@@ -170,6 +229,26 @@ class Simulation:
             dynamics=self.backend,
         )
         self.rhs_evaluations = 0
+        self._fallback = self._check_on_alarm(gravity)
+
+    def _check_on_alarm(self, gravity):
+        """Validate ``watch.on_alarm`` against the integrator/backend; build what it needs."""
+        scene, action = self.scene, self.scene.watch.on_alarm
+        if action == "tighten" and scene.integrator.method not in _TIGHTENABLE:
+            raise scene.error(
+                "watch.on_alarm",
+                f"tighten needs an adaptive integrator ({', '.join(_TIGHTENABLE)}), "
+                f"got {scene.integrator.method}",
+            )
+        if action == "switch-backend":
+            if scene.backend == MOST_ACCURATE_BACKEND:
+                raise scene.error(
+                    "watch.on_alarm",
+                    f"switch-backend moves to {MOST_ACCURATE_BACKEND}, which the scene "
+                    "already uses (dynamics.backend)",
+                )
+            return make_backend(MOST_ACCURATE_BACKEND, self.robot, gravity)
+        return None
 
     # -- dynamics ------------------------------------------------------------------------
     def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -184,7 +263,10 @@ class Simulation:
     def acceleration(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """A = FD(q, v, τ(t, q, v)) from the backend; counts one RHS evaluation."""
         self.rhs_evaluations += 1
-        return self.backend.forward_dynamics(q, v, self.tau(t, q, v))
+        a = self.backend.forward_dynamics(q, v, self.tau(t, q, v))
+        if not np.all(np.isfinite(a)):
+            raise _Diverged(t, f"non-finite acceleration from the {self.backend.name} backend")
+        return a
 
     def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
         """ẋ = (v, a) for x = (q, v) (Euclidean q only)."""
@@ -247,15 +329,28 @@ class Simulation:
             atol=spec.atol,
             max_step=spec.max_step,
         )
+        self._solver = solver
         nq = self.robot.nq
         next_sample = 1
+        min_step = MIN_STEP_FRACTION * self.scene.duration_s
         while solver.status == "running":
             message = solver.step()
             if solver.status == "failed":
-                return "failed", f"{spec.method} failed: {message}"
+                if "step size" in str(message):
+                    return "diverged", (
+                        f"step size collapsed at t = {solver.t:.6g} s ({spec.method}: {message})"
+                    )
+                return "failed", f"{spec.method} failed at t = {solver.t:.6g} s: {message}"
             self.steps += 1
             if not np.all(np.isfinite(solver.y)):
                 return "diverged", f"non-finite state at t = {solver.t:.6g} s"
+            step = solver.step_size
+            if solver.status == "running" and step is not None and step < min_step:
+                return "diverged", (
+                    f"step size collapsed to {step:.3g} s (< {min_step:.3g} s) at "
+                    f"t = {solver.t:.6g} s: the dynamics are blowing up or too stiff for "
+                    f"{spec.method}"
+                )
             due = next_sample
             while due < sample_times.size and sample_times[due] <= solver.t + 1e-12:
                 due += 1
@@ -286,6 +381,8 @@ class Simulation:
         ts, qs, vs, energies, kinetic = [], [], [], [], [0.0]
         self.steps = 0
         self.rhs_evaluations = 0
+        self.actions: list[str] = []
+        self._solver = None
 
         def record(t, q, v):
             if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
@@ -304,6 +401,13 @@ class Simulation:
                     f"{alarm.metric} = {alarm.value:.4g} crossed {alarm.threshold:.4g} "
                     f"at t = {t:.6g} s",
                 )
+            if alarm is not None and self._fallback is not None:
+                self.actions.append(
+                    f"t = {t:.6g} s: backend {self.backend.name} -> {self._fallback.name}"
+                )
+                self.backend, self._fallback = self._fallback, None
+            if scene.watch.on_alarm == "tighten":
+                self._tighten(t)
             return None
 
         start = time.perf_counter()
@@ -316,6 +420,8 @@ class Simulation:
                 )
         except KeyboardInterrupt:
             outcome = ("interrupted", "interrupted by the user (Ctrl-C)")
+        except _Diverged as exc:
+            outcome = ("diverged", f"{exc.cause} at t = {exc.time_s:.6g} s")
         wall = time.perf_counter() - start
         status, message = outcome
         watch = self.watch.arrays() if self.watch.metrics else {}
@@ -340,7 +446,31 @@ class Simulation:
             wall_time_s=wall,
             effects=scene.effect_names,
             kinetic_peak=float(max(kinetic)),
+            actions=tuple(self.actions),
+            backend=self.backend.name,
         )
+
+    def _tighten(self, t: float) -> None:
+        """Set rtol ← max(rtol₀ · threshold / estimate, RTOL_FLOOR), atol by the same factor."""
+        watch, solver = self.watch, self._solver
+        if solver is None or watch.alarm_metric is None:  # the t0 sample comes before the solver
+            return
+        value = watch.series[watch.alarm_metric][-1]
+        estimate = watch.metrics[watch.alarm_metric].severity(value)
+        spec = self.scene.integrator
+        if not estimate > watch.alarm_threshold:
+            return
+        factor = max(watch.alarm_threshold / estimate, RTOL_FLOOR / spec.rtol)
+        rtol = spec.rtol * factor
+        if rtol >= 0.99 * float(np.min(solver.rtol)):  # only ever tighten
+            return
+        self.actions.append(
+            f"t = {t:.6g} s: {watch.alarm_metric} = {value:.4g}, "
+            f"rtol {float(np.min(solver.rtol)):.3g} -> {rtol:.3g}"
+        )
+        solver.rtol, solver.atol = rtol, spec.atol * factor
+        if hasattr(solver, "newton_tol"):  # Radau's Newton tolerance follows rtol
+            solver.newton_tol = max(10 * np.finfo(float).eps / rtol, min(0.03, rtol**0.5))
 
 
 def run_scene(scene: Scene, *, progress: Callable[[float], None] | None = None) -> Trajectory:

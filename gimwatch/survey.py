@@ -21,16 +21,14 @@ carry the extremes. Nothing here prints; :mod:`gimwatch.survey_report` writes th
 from __future__ import annotations
 
 import threading
-import warnings
 from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import scipy.linalg
-import scipy.stats
 
 from gimwatch.analysis import check_robot_gim
 from gimwatch.conditioning import ldlt_pivots, udut_pivots
@@ -38,6 +36,14 @@ from gimwatch.errors import ConditioningError, GimwatchError, InputError, RobotE
 from gimwatch.inertia import gim
 from gimwatch.robots import Robot, example_robot_names, load_robot, neutral_configuration
 from gimwatch.robots import random_configurations as _random_configurations
+from gimwatch.survey_trajectory import (
+    TrajectorySettings,
+    TrajectoryStatistics,
+    correlations,
+    run_trajectory,
+    skip_reason,
+    summarize_runs,
+)
 from gimwatch.sweep import Task, run_sweep
 
 __all__ = [
@@ -119,6 +125,15 @@ def _survey_chunk(spec: str, floating: bool, qs: np.ndarray) -> dict | str:
         return str(exc)
 
 
+def _trajectory_task(spec: str, floating: bool, q0: np.ndarray, start: int, settings):
+    """Worker entry point: one simulated run (a ``SurveyRun``), or why it could not run."""
+    try:
+        robot, _ = _worker_robot(spec, floating, threading.get_ident())
+        return run_trajectory(robot, q0, start, settings)
+    except GimwatchError as exc:
+        return str(exc)
+
+
 @dataclass(frozen=True)
 class WorstConfiguration:
     """One of the worst-conditioned samples of a robot."""
@@ -161,6 +176,7 @@ class RobotSurvey:
         extreme_dofs: ``DOF_METRICS`` key -> (most frequent coordinate, its frequency).
         lambda_min_on_min_diagonal: Fraction of samples where λmin's eigenvector is
             dominated by the coordinate that holds the smallest diagonal entry.
+        trajectories: Along-trajectory statistics (None without trajectories).
     """
 
     name: str
@@ -180,6 +196,7 @@ class RobotSurvey:
     worst: tuple[WorstConfiguration, ...]
     extreme_dofs: dict[str, tuple[str, float]]
     lambda_min_on_min_diagonal: float
+    trajectories: TrajectoryStatistics | None = None
 
     @property
     def samples(self) -> int:
@@ -201,16 +218,7 @@ class SurveyResult:
     seed: int
     interrupted: bool = False
     not_reached: tuple[str, ...] = ()
-
-
-def _correlations(delta: np.ndarray, kappa: np.ndarray) -> tuple[float, float]:
-    if delta.size < 3 or np.ptp(delta) == 0 or np.ptp(kappa) == 0:
-        return float("nan"), float("nan")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", scipy.stats.ConstantInputWarning)
-        pearson = scipy.stats.pearsonr(np.log(delta), np.log(kappa)).statistic
-        spearman = scipy.stats.spearmanr(delta, kappa).statistic
-    return float(pearson), float(spearman)
+    trajectory_settings: TrajectorySettings | None = None
 
 
 def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> RobotSurvey:
@@ -218,7 +226,7 @@ def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> Robot
     alpha = float(kappa[0] / delta[0]) if index[0] == 0 else float("nan")
     later = index > 0
     error = np.abs(alpha * delta[later] - kappa[later]) / kappa[later]
-    pearson, spearman = _correlations(delta, kappa)
+    pearson, spearman = correlations(delta, kappa)
     quantiles = {
         key: {name: float(np.quantile(metrics[key], level)) for name, level in QUANTILES.items()}
         for key in ("kappa", "delta", "pivot_forward", "pivot_backward")
@@ -287,6 +295,7 @@ def run_survey(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: Callable[[int, int], None] | None = None,
+    trajectories: TrajectorySettings | None = None,
 ) -> SurveyResult:
     """Survey robots at the neutral configuration plus ``samples`` random ones each.
 
@@ -303,6 +312,8 @@ def run_survey(
         workers: Local processes (default: every core; 1 runs in this process).
         scheduler: ``"local"`` or a Dask scheduler address to run the chunks on Dask.
         progress: Called as ``progress(finished_chunks, total_chunks)`` after each chunk.
+        trajectories: Also simulate short runs from random samples 1..count of each robot
+            (:mod:`gimwatch.survey_trajectory`); each run is one more task of the sweep.
     """
     for name, value in (("samples", samples), ("chunk_size", chunk_size)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
@@ -325,6 +336,14 @@ def run_survey(
             chunk = qs[start : start + chunk_size]
             tasks.append(Task(_survey_chunk, (_worker_spec(robot.spec), robot.floating, chunk)))
             owners.append((k, start))
+    runs_wanted = 0 if trajectories is None else min(trajectories.count, samples)
+    for k, (robot, _, qs) in enumerate(loaded):
+        if runs_wanted == 0 or skip_reason(robot):
+            continue
+        for start in range(1, 1 + runs_wanted):
+            args = (_worker_spec(robot.spec), robot.floating, qs[start], start, trajectories)
+            tasks.append(Task(_trajectory_task, args))
+            owners.append((k, -start))  # negative: a run from that sample
     finished = 0
 
     def chunk_done(_: int) -> None:
@@ -335,9 +354,10 @@ def run_survey(
 
     outcome = run_sweep(tasks, workers=workers, scheduler=scheduler, progress=chunk_done)
     by_robot: dict[int, list] = {k: [] for k in range(len(loaded))}
+    runs: dict[int, list] = {k: [] for k in range(len(loaded))}
     for i in sorted(outcome.results):  # task order: robot by robot, chunks ascending
         k, start = owners[i]
-        by_robot[k].append((start, outcome.results[i]))
+        (by_robot[k] if start >= 0 else runs[k]).append((start, outcome.results[i]))
     robots, not_reached = [], []
     for k, (robot, note, qs) in enumerate(loaded):
         parts = by_robot[k]
@@ -350,7 +370,10 @@ def run_survey(
             continue
         index = np.concatenate([np.arange(s, s + len(p["kappa"])) for s, p in parts])
         metrics = {key: np.concatenate([p[key] for _, p in parts]) for key in parts[0][1]}
-        robots.append(_summarize(robot, note, index, metrics, qs))
+        summary = _summarize(robot, note, index, metrics, qs)
+        if trajectories is not None:
+            summary = replace(summary, trajectories=_trajectory_statistics(robot, runs[k]))
+        robots.append(summary)
     return SurveyResult(
         robots=tuple(robots),
         failures=tuple(failures),
@@ -358,4 +381,13 @@ def run_survey(
         seed=seed,
         interrupted=outcome.interrupted,
         not_reached=tuple(not_reached),
+        trajectory_settings=trajectories,
     )
+
+
+def _trajectory_statistics(robot: Robot, parts: list) -> TrajectoryStatistics:
+    if skip_reason(robot):
+        return TrajectoryStatistics(skipped=skip_reason(robot))
+    done = [part for _, part in parts if not isinstance(part, str)]
+    errors = [(-start, part) for start, part in parts if isinstance(part, str)]
+    return summarize_runs(done, errors)

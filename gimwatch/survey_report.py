@@ -10,15 +10,14 @@ import csv
 import datetime
 import io
 import math
-import platform
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 
-from gimwatch._version import __version__
+from gimwatch.environment import cpu_model, versions
 from gimwatch.results import write_bytes_atomic, write_json_atomic, write_text_atomic
 from gimwatch.survey import DOF_METRICS, METRICS, RobotSurvey, SurveyResult
+from gimwatch.survey_trajectory import TrajectoryStatistics
 
 __all__ = [
     "plot_kappa_vs_delta",
@@ -28,7 +27,9 @@ __all__ = [
     "write_survey",
 ]
 
-CSV_COLUMNS = ("robot", "sample", *METRICS, "alpha_delta", *DOF_METRICS)
+#: ``trajectory`` and ``t_s`` are empty on the random samples; on the rows of a simulated run
+#: ``sample`` is the sample it started from and only κ, δ and αδ are filled (the watched ones).
+CSV_COLUMNS = ("robot", "sample", "trajectory", "t_s", *METRICS, "alpha_delta", *DOF_METRICS)
 SCATTER_PNG = "kappa_vs_delta.png"
 GRID_PNG = "kappa_vs_delta_per_robot.png"
 _EXTREME_COLUMNS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_max_dof", "lambda_min_dof")
@@ -46,24 +47,38 @@ def _base(robot: RobotSurvey) -> str:
     return ("floating" if robot.floating else "fixed") + ("*" if robot.note else "")
 
 
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def _versions() -> dict[str, str]:
-    versions = {"gimwatch": __version__}
-    for package in ("pin", "example-robot-data-loaders", "numpy", "scipy"):
-        try:
-            versions[package] = metadata.version(package)
-        except metadata.PackageNotFoundError:
-            versions[package] = "?"
-    return versions
+def _trajectory_record(stats: TrajectoryStatistics | None) -> dict | None:
+    if stats is None:
+        return None
+    return {
+        "skipped": stats.skipped,
+        "runs": len(stats.runs),
+        "completed": len(stats.completed),
+        "pearson_log_delta_log_kappa_median": stats.pearson_log_median,
+        "pearson_log_delta_log_kappa_min": stats.pearson_log_min,
+        "spearman_delta_kappa_median": stats.spearman_median,
+        "alpha_delta_rel_error_median": stats.alpha_delta_rel_error_median,
+        "alpha_delta_rel_error_max": stats.alpha_delta_rel_error_max,
+        "kappa_spread_median": stats.kappa_spread_median,
+        "errors": [{"start_sample": s, "reason": r} for s, r in stats.errors],
+        "per_run": [
+            {
+                "start_sample": run.start_sample,
+                "status": run.status,
+                "message": run.message,
+                "method": run.method,
+                "steps": run.steps,
+                "samples": int(run.t.size),
+                "alpha": run.alpha,
+                "kappa_spread": run.kappa_spread,
+                "pearson_log_delta_log_kappa": run.pearson_log,
+                "spearman_delta_kappa": run.spearman,
+                "alpha_delta_rel_error_median": run.alpha_delta_rel_error_median,
+                "alpha_delta_rel_error_max": run.alpha_delta_rel_error_max,
+            }
+            for run in stats.runs
+        ],
+    }
 
 
 def survey_record(result: SurveyResult, *, wall_time_s: float | None = None) -> dict:
@@ -92,16 +107,20 @@ def survey_record(result: SurveyResult, *, wall_time_s: float | None = None) -> 
                     {"sample": w.sample, "kappa": w.kappa, "delta": w.delta, "q": list(w.q)}
                     for w in r.worst
                 ],
+                "trajectories": _trajectory_record(r.trajectories),
             }
         )
     return {
         "samples_per_robot": result.samples,
         "seed": result.seed,
         "calibration": "alpha = kappa/delta at sample 0, the neutral configuration",
+        "trajectory_settings": (
+            None if result.trajectory_settings is None else result.trajectory_settings.record()
+        ),
         "interrupted": result.interrupted,
         "not_reached": list(result.not_reached),
         "wall_time_s": wall_time_s,
-        "versions": _versions(),
+        "versions": versions(),
         "robots": robots,
         "failures": [vars(f) for f in result.failures],
     }
@@ -116,26 +135,44 @@ def _csv_text(result: SurveyResult) -> str:
         for row, sample in enumerate(r.sample_index):
             floats = [repr(float(r.metrics[key][row])) for key in METRICS]
             dofs = [r.dof_names[r.metrics[key][row]] for key in DOF_METRICS]
-            writer.writerow([r.name, int(sample), *floats, repr(float(alpha_delta[row])), *dofs])
+            writer.writerow(
+                [r.name, int(sample), "", "", *floats, repr(float(alpha_delta[row])), *dofs]
+            )
+        for k, run in enumerate(() if r.trajectories is None else r.trajectories.runs):
+            for row, t in enumerate(run.t):
+                floats = [""] * len(METRICS)
+                floats[METRICS.index("kappa")] = repr(float(run.kappa[row]))
+                floats[METRICS.index("delta")] = repr(float(run.delta[row]))
+                cells = [r.name, run.start_sample, k, repr(float(t)), *floats]
+                writer.writerow([*cells, repr(float(run.alpha_delta[row])), *[""] * 4])
     return buffer.getvalue()
 
 
 def readme_table(result: SurveyResult) -> str:
     """Markdown table "Does the diagonal ratio track κ on real robots?", one row per robot."""
+    along = result.trajectory_settings is not None
     lines = [
         "| robot | nv | base | κ median | κ max | δ median | Pearson log δ~log κ | Spearman δ~κ "
-        "| αδ rel. err. median | αδ rel. err. max | λmin eigenvector on |",
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|",
+        "| αδ rel. err. median | αδ rel. err. max | λmin eigenvector on |"
+        + (" along runs: Pearson (median) | along runs: αδ rel. err. median |" if along else ""),
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|" + ("---:|---:|" if along else ""),
     ]
     for r in result.robots:
         q_kappa, q_delta = r.quantiles["kappa"], r.quantiles["delta"]
         dof, frequency = r.extreme_dofs["lambda_min_dof"]
-        lines.append(
+        line = (
             f"| {r.name} | {r.nv} | {_base(r)} | {_g(q_kappa['median'])} | {_g(q_kappa['max'])} "
             f"| {_g(q_delta['median'])} | {_f(r.pearson_log)} | {_f(r.spearman)} "
             f"| {_g(r.alpha_delta_rel_error_median, 2)} | {_g(r.alpha_delta_rel_error_max, 2)} "
             f"| {dof} ({frequency:.0%}) |"
         )
+        if along:
+            stats = r.trajectories or TrajectoryStatistics()
+            line += (
+                f" {_f(stats.pearson_log_median)}{'†' if stats.skipped else ''} "
+                f"| {_g(stats.alpha_delta_rel_error_median, 2)} |"
+            )
+        lines.append(line)
     return "\n".join(lines) + "\n"
 
 
@@ -152,17 +189,88 @@ def _summary(result: SurveyResult) -> str:
         f"{pearson.size} robots with a varying κ; r > 0.9 for {np.sum(pearson > 0.9)}, "
         f"r < 0.5 for {np.sum(pearson < 0.5)}. Median relative error of αδ (α at the neutral "
         f"configuration): median {np.median(error):.2g} over robots, worst "
-        f"{np.max(error):.2g}.\n"
+        f"{np.max(error):.2g}.\n" + _trajectory_summary(result)
     )
 
 
+def _trajectory_summary(result: SurveyResult) -> str:
+    stats = [r.trajectories for r in result.robots if r.trajectories is not None]
+    runs = [run for s in stats for run in s.runs]
+    if not stats:
+        return ""
+    pearson = np.array([s.pearson_log_median for s in stats])
+    pearson = pearson[np.isfinite(pearson)]
+    error = np.array([s.alpha_delta_rel_error_median for s in stats])
+    error = error[np.isfinite(error)]
+    simulated = sum(1 for s in stats if not s.skipped)
+    text = (
+        f"\nAlong simulated trajectories: {simulated} robots simulated, "
+        f"{sum(run.status == 'completed' for run in runs)} of {len(runs)} runs completed"
+    )
+    if pearson.size:
+        text += (
+            f"; Pearson r(log δ, log κ) along a run, median over robots {np.median(pearson):.2f}"
+            f" (r > 0.9 for {np.sum(pearson > 0.9)} of {pearson.size})"
+        )
+    if error.size:
+        text += f"; αδ relative error (α at t0 of each run), median {np.median(error):.2g}"
+    return text + ".\n"
+
+
+def _trajectory_section(result: SurveyResult) -> list[str]:
+    settings = result.trajectory_settings
+    if settings is None:
+        return []
+    lines = [
+        "",
+        "## Along simulated trajectories",
+        "",
+        f"Per robot, up to {settings.count} runs of {settings.duration_s:g} s from random samples "
+        f"1..{settings.count}, at rest, falling under gravity (z down; y down for generated "
+        f"chains) with light joint damping c_i = {settings.damping_per_s:g}/s · M_ii(q0); "
+        f"joint limits are not enforced. DOP853 (rtol {settings.rtol:g}, atol "
+        f"{settings.atol:g}), or RK4 (dt {settings.dt_s:g} s) for robots with continuous "
+        f"joints; runs stop after {settings.max_steps} steps. The watch samples κ and δ "
+        f"every {settings.sample_s:g} s; α = κ/δ is calibrated at t0 of each run (the "
+        "paper's setting) and αδ errors are over the later samples of the completed runs. "
+        "Correlations: median (and minimum) over completed runs; κ spread = max κ / min κ "
+        "along a run (median over runs).",
+        "",
+        "| robot | runs completed | integrator | κ spread | Pearson log δ~log κ median (min) "
+        "| Spearman δ~κ median | αδ rel. err. median | αδ rel. err. max | notes |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---|",
+    ]
+    for r in result.robots:
+        t = r.trajectories
+        if t is None:
+            continue
+        if t.skipped:
+            lines.append(f"| {r.name} | 0/0 | — | — | — | — | — | — | not simulated: {t.skipped} |")
+            continue
+        notes = [f"from sample {s}: {reason}" for s, reason in t.errors]
+        notes += [
+            f"from sample {run.start_sample}: {run.status}, {run.message}"
+            for run in t.runs
+            if run.status != "completed"
+        ]
+        method = "/".join(sorted({run.method for run in t.runs})) or "—"
+        lines.append(
+            f"| {r.name} | {len(t.completed)}/{len(t.runs) + len(t.errors)} | {method} "
+            f"| {_g(t.kappa_spread_median)} | {_f(t.pearson_log_median)} ({_f(t.pearson_log_min)}) "
+            f"| {_f(t.spearman_median)} | {_g(t.alpha_delta_rel_error_median, 2)} "
+            f"| {_g(t.alpha_delta_rel_error_max, 2)} | {'; '.join(notes)} |"
+        )
+    return lines
+
+
 def _report(result: SurveyResult, wall_time_s: float | None) -> str:
-    versions = ", ".join(f"{k} {v}" for k, v in _versions().items())
+    libraries = ", ".join(f"{k} {v}" for k, v in versions().items())
     wall = "" if wall_time_s is None else f", wall time {wall_time_s:.1f} s"
     lines = [
         "# Survey: does the diagonal ratio track κ on real robots?",
         "",
-        f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}; {versions}; CPU {_cpu()}.",
+        f"{datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}; {libraries}; "
+        f"CPU {cpu_model()}.",
         f"{result.samples} random configurations per robot + the neutral one (sample 0), "
         f"seed {result.seed}{wall}. α = κ/δ is calibrated at the neutral configuration; "
         "αδ errors are over the random samples.",
@@ -175,7 +283,12 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
     lines += [
         "`*`: no joint with a fixed base, surveyed with a free-flyer base. With a floating "
         "base the GIM mixes kg (translations) and kg·m² (rotations): κ and δ depend on units. "
-        "`—`: undefined, κ or δ is the same at every sample.",
+        "`—`: undefined, κ or δ is the same at every sample."
+        + (
+            " Along runs: see the section on simulated trajectories; `†`: not simulated."
+            if result.trajectory_settings is not None
+            else ""
+        ),
         "",
         "## Pivot ratios (median / max)",
         "",
@@ -217,6 +330,7 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
     for r in result.robots:
         for w in r.worst:
             lines.append(f"| {r.name} | {w.sample} | {_g(w.kappa, 4)} | {_g(w.delta, 4)} |")
+    lines += _trajectory_section(result)
     if result.failures:
         lines += ["", "## Robots not surveyed", "", "| robot | stage | reason |", "|---|---|---|"]
         lines += [f"| {f.spec} | {f.stage} | {f.reason} |" for f in result.failures]

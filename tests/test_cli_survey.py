@@ -70,8 +70,50 @@ def test_survey_ctrl_c_writes_partial_results_and_exits_130(capsys, tmp_path, mo
         (["survey", "ur5", "--samples", "0"], "argument --samples: must be a positive integer"),
         (["survey", "ur5", "--workers", "x"], "argument --workers: must be a positive integer"),
         (["survey"], "the following arguments are required: ROBOT"),
+        (
+            ["survey", "ur5", "--trajectory", "--duration", "0"],
+            "argument --duration: must be a positive number of seconds, got '0'",
+        ),
+        (["survey", "ur5", "--runs", "-1"], "argument --runs: must be a positive integer"),
     ],
 )
 def test_survey_bad_arguments(capsys, argv, message):
     code, out, err = run(capsys, *argv)
     assert code == 2 and err.count("\n") == 1 and message in err and out == ""
+
+
+def test_survey_trajectory_writes_the_along_run_columns(capsys, tmp_path):
+    argv = ["survey", "ur5", "hector", "--samples", "3", "--workers", "1", "--trajectory"]
+    code, out, err = run(capsys, *argv, "--duration", "0.1", "--runs", "2", "-o", str(tmp_path))
+    assert code == 0, err
+    assert "run pearson" in out.splitlines()[0]
+    rows = list(csv.DictReader((tmp_path / "survey.csv").open()))
+    assert list(rows[0])[:4] == ["robot", "sample", "trajectory", "t_s"]
+    samples = [r for r in rows if r["trajectory"] == ""]
+    runs = [r for r in rows if r["trajectory"] != ""]
+    assert len(samples) == 2 * 4 and {r["robot"] for r in runs} == {"ur5"}
+    assert len(runs) == 2 * 11  # 2 runs, 0.1 s sampled every 0.01 s (duration / 10)
+    record = json.loads((tmp_path / "survey.json").read_text())
+    assert record["trajectory_settings"]["runs_per_robot"] == 2
+    assert record["trajectory_settings"]["duration_s"] == 0.1
+    ur5, hector = record["robots"]
+    assert (
+        hector["trajectories"]["runs"] == 0 and "floating base" in hector["trajectories"]["skipped"]
+    )
+    # the JSON statistics recomputed from the CSV rows (alpha = kappa/delta at t0 of each run)
+    errors, pearsons = [], []
+    for k in ("0", "1"):
+        kappa = np.array([float(r["kappa"]) for r in runs if r["trajectory"] == k])
+        delta = np.array([float(r["delta"]) for r in runs if r["trajectory"] == k])
+        ad = np.array([float(r["alpha_delta"]) for r in runs if r["trajectory"] == k])
+        np.testing.assert_allclose(ad, kappa[0] / delta[0] * delta, rtol=1e-12)
+        errors.append(np.abs(ad[1:] - kappa[1:]) / kappa[1:])
+        pearsons.append(np.corrcoef(np.log(delta), np.log(kappa))[0, 1])
+    stats = ur5["trajectories"]
+    assert stats["completed"] == 2
+    assert stats["alpha_delta_rel_error_median"] == pytest.approx(np.median(np.concatenate(errors)))
+    assert stats["pearson_log_delta_log_kappa_median"] == pytest.approx(np.median(pearsons))
+    report = (tmp_path / "report.md").read_text()
+    assert "## Along simulated trajectories" in report and "| ur5 | 2/2 | DOP853 |" in report
+    assert "| hector | 0/0 | — |" in report
+    assert "along runs: Pearson (median)" in (tmp_path / "table.md").read_text()

@@ -165,7 +165,7 @@ def test_long_chain_simulation_switches_to_denoc_and_builds_no_data(monkeypatch)
     monkeypatch.setattr(Robot, "new_data", refuse)
     with pytest.warns(BackendWarning, match="using the O\\(n\\) denoc backend instead of aba"):
         run = _swing("chain:450", "aba", duration=0.02)
-    assert run.t.size == 5 and np.all(np.isfinite(run.q))
+    assert run.t.size == 5 and np.all(np.isfinite(run.q)) and run.backend == "denoc"
     assert run.watch["watch_diagonal_ratio"][0] == pytest.approx(450**3, rel=1e-12)
     assert abs(run.energy[-1] - run.energy[0]) <= 1e-8 * abs(run.energy).max() + 1e-8
 
@@ -178,3 +178,26 @@ def test_floating_base_long_chain_keeps_the_numpy_recursions():
     np.testing.assert_allclose(
         denoc.gim_diagonal(q), np.diag(pin.crba(robot.model, robot.new_data(), q)), rtol=1e-12
     )
+
+
+def test_simulate_backend_option_overrides_the_scene(tmp_path, capsys):
+    import json
+
+    from gimwatch.cli import main
+
+    scene = tmp_path / "chain.toml"
+    scene.write_text(
+        'robot = "chain:30"\nduration = 0.05\nsample = 0.01\n'
+        "[effects.gravity]\nvector = [0.0, -9.81, 0.0]\n"
+        '[integrator]\nmethod = "RK4"\ndt = 0.001\n[dynamics]\nbackend = "aba"\n'
+        '[watch]\nmetrics = ["diagonal_ratio"]\n'
+    )
+    results = {}
+    for backend in ("aba", "denoc"):
+        out = tmp_path / backend
+        assert main(["simulate", str(scene), "-o", str(out), "--backend", backend]) == 0
+        summary = json.loads((out / "summary.json").read_text())
+        results[backend] = np.load(out / "trajectory.npz", allow_pickle=False)["q"]
+        assert summary["backend"] == backend
+    capsys.readouterr()
+    np.testing.assert_allclose(results["denoc"], results["aba"], rtol=0, atol=1e-10)

@@ -5,13 +5,15 @@ from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM, planar_rod
 from gimwatch.analysis import analyze_configuration
 from gimwatch.robots import load_robot, random_configurations
 from gimwatch.survey import DOF_METRICS, METRICS, run_survey, sample_metrics
+from gimwatch.survey_trajectory import FLOATING_REASON, TrajectorySettings
 
 SPECS = ["chain:4", "ur5", "cassie", "bravo7_gripper", "hector"]
+RUNS = TrajectorySettings(count=2, duration_s=0.2, sample_s=0.02)
 
 
 @pytest.fixture(scope="module")
 def serial():
-    return run_survey(SPECS, samples=12, seed=3, chunk_size=5, workers=1)
+    return run_survey(SPECS, samples=12, seed=3, chunk_size=5, workers=1, trajectories=RUNS)
 
 
 def _same(a, b):
@@ -22,6 +24,15 @@ def _same(a, b):
         for key in METRICS + DOF_METRICS:
             np.testing.assert_array_equal(x.metrics[key], y.metrics[key], err_msg=f"{x.name} {key}")
         assert x.alpha == y.alpha and x.worst == y.worst
+        assert (x.trajectories is None) == (y.trajectories is None)
+        if x.trajectories is None:
+            continue
+        assert x.trajectories.skipped == y.trajectories.skipped
+        assert len(x.trajectories.runs) == len(y.trajectories.runs)
+        for u, w in zip(x.trajectories.runs, y.trajectories.runs, strict=True):
+            assert (u.start_sample, u.status, u.steps) == (w.start_sample, w.status, w.steps)
+            for key in ("t", "q", "kappa", "delta", "alpha_delta"):
+                np.testing.assert_array_equal(getattr(u, key), getattr(w, key), err_msg=key)
 
 
 def test_chain_metrics_match_the_closed_form_rod_gim():
@@ -96,7 +107,8 @@ def test_failures_are_reported_and_the_survey_goes_on(serial):
 
 
 def test_process_pool_gives_identical_results(serial):
-    _same(run_survey(SPECS, samples=12, seed=3, chunk_size=5, workers=2), serial)
+    result = run_survey(SPECS, samples=12, seed=3, chunk_size=5, workers=2, trajectories=RUNS)
+    _same(result, serial)
 
 
 def test_dask_local_cluster_gives_identical_results(serial):
@@ -106,7 +118,12 @@ def test_dask_local_cluster_gives_identical_results(serial):
         n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
     ) as cluster:
         result = run_survey(
-            SPECS, samples=12, seed=3, chunk_size=5, scheduler=cluster.scheduler_address
+            SPECS,
+            samples=12,
+            seed=3,
+            chunk_size=5,
+            scheduler=cluster.scheduler_address,
+            trajectories=RUNS,
         )
     _same(result, serial)
 
@@ -139,3 +156,68 @@ def test_every_example_robot_is_surveyed_or_explained(name):
     (robot,) = result.robots
     assert robot.floating == (name in NO_DOF_WHEN_FIXED) and robot.samples == 3
     assert np.all(np.isfinite(robot.metrics["kappa"]))
+
+
+def _independent_run_statistics(robot, run):
+    """κ, δ at every sampled q from analyze_configuration, then α, errors, correlations."""
+    refs = [analyze_configuration(robot, q) for q in run.q]
+    kappa = np.array([ref.kappa for ref in refs])
+    delta = np.array([ref.diagonal_ratio for ref in refs])
+    alpha = kappa[0] / delta[0]  # calibrated at t0 of the run (Eq. 15)
+    error = np.abs(alpha * delta[1:] - kappa[1:]) / kappa[1:]
+    pearson = np.corrcoef(np.log(delta), np.log(kappa))[0, 1]
+    ranks = [np.argsort(np.argsort(x)) for x in (delta, kappa)]
+    return kappa, delta, alpha, error, pearson, np.corrcoef(*ranks)[0, 1]
+
+
+def test_trajectory_statistics_match_an_independent_recomputation(serial):
+    for r in serial.robots[:2]:  # chain_4, ur5
+        robot = load_robot(r.spec)
+        stats = r.trajectories
+        assert len(stats.completed) == 2 and stats.skipped == "" and stats.errors == ()
+        qs = random_configurations(robot, 12, seed=3)
+        errors, pearsons = [], []
+        for k, run in enumerate(stats.runs):
+            assert run.start_sample == k + 1 and run.method == "DOP853"
+            np.testing.assert_array_equal(run.q[0], qs[k])  # starts at random sample k + 1
+            np.testing.assert_allclose(run.t, np.arange(11) * 0.02, atol=1e-12)
+            assert np.ptp(run.q, axis=0).max() > 1e-3  # it moved
+            kappa, delta, alpha, error, pearson, spearman = _independent_run_statistics(robot, run)
+            np.testing.assert_allclose(run.kappa, kappa, rtol=1e-9)
+            np.testing.assert_allclose(run.delta, delta, rtol=1e-12)
+            np.testing.assert_allclose(run.alpha_delta, alpha * delta, rtol=1e-9)
+            assert run.alpha == pytest.approx(alpha, rel=1e-9)
+            assert run.alpha_delta_rel_error_median == pytest.approx(np.median(error), abs=1e-9)
+            assert run.pearson_log == pytest.approx(pearson, rel=1e-9)
+            assert run.spearman == pytest.approx(spearman, rel=1e-9)
+            errors.append(error)
+            pearsons.append(pearson)
+        pooled = np.concatenate(errors)
+        assert stats.alpha_delta_rel_error_median == pytest.approx(np.median(pooled), abs=1e-9)
+        assert stats.alpha_delta_rel_error_max == pytest.approx(pooled.max(), abs=1e-9)
+        assert stats.pearson_log_median == pytest.approx(np.median(pearsons), rel=1e-9)
+        assert stats.pearson_log_min == pytest.approx(min(pearsons), rel=1e-9)
+
+
+def test_floating_robots_are_not_simulated_and_say_why(serial):
+    hector = serial.robots[2].trajectories
+    assert hector.runs == () and hector.skipped == FLOATING_REASON
+    assert np.isnan(hector.pearson_log_median)
+
+
+def test_continuous_joints_use_rk4_and_a_stiff_run_stops_at_the_step_budget():
+    settings = TrajectorySettings(count=1, duration_s=0.1, sample_s=0.01)
+    (kinova,) = run_survey(["kinova"], samples=1, workers=1, trajectories=settings).robots
+    (run,) = kinova.trajectories.runs
+    assert run.method == "RK4" and run.status == "completed" and run.steps == 100
+    robot = load_robot("kinova")
+    kappa, delta, *_ = _independent_run_statistics(robot, run)
+    np.testing.assert_allclose(run.kappa, kappa, rtol=1e-9)
+    np.testing.assert_allclose(run.delta, delta, rtol=1e-12)
+    budget = TrajectorySettings(count=1, duration_s=0.1, sample_s=0.01, max_steps=30)
+    (capped,) = run_survey(["kinova"], samples=1, workers=1, trajectories=budget).robots
+    (run,) = capped.trajectories.runs
+    assert run.status == "step-budget" and run.steps == 30 and run.t[-1] == pytest.approx(0.03)
+    assert capped.trajectories.completed == () and np.isnan(
+        capped.trajectories.alpha_delta_rel_error_median
+    )

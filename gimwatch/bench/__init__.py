@@ -127,6 +127,12 @@ SECTIONS: dict[str, Section] = {
             "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
         ),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain"),
+        Section(
+            "tighten",
+            "Tightening the tolerance on alarm",
+            "gimwatch.bench.tighten",
+            ("gimwatch.simulate",),
+        ),
     )
 }
 

@@ -18,7 +18,8 @@ from pathlib import Path
 
 from gimwatch._version import __version__
 from gimwatch.bench import SectionResult, Table
-from gimwatch.bench.timing import blas_thread_ratio, cpu_model, thread_settings
+from gimwatch.bench.timing import blas_thread_ratio, thread_settings
+from gimwatch.environment import cpu_model
 from gimwatch.errors import InputError
 from gimwatch.results import write_json_atomic, write_text_atomic
 

@@ -9,7 +9,6 @@ times is kept. Ratios are always taken between medians measured in the same run.
 from __future__ import annotations
 
 import os
-import platform
 import statistics
 import time
 from collections.abc import Callable
@@ -24,7 +23,6 @@ from gimwatch.robots import DATA_NV_LIMIT, Robot
 __all__ = [
     "Timing",
     "blas_thread_ratio",
-    "cpu_model",
     "data_if_it_fits",
     "thread_settings",
     "time_call",
@@ -88,20 +86,6 @@ def time_call(
         rounds=repeats,
         number=number,
     )
-
-
-def cpu_model() -> str:
-    """The CPU's model name (from /proc/cpuinfo on Linux) and the number of cores."""
-    name = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    name = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return f"{name} ({os.cpu_count()} logical cores)"
 
 
 def thread_settings() -> str:

@@ -31,9 +31,9 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _commands() -> dict[str, ModuleType]:
-    from gimwatch.cli import analyze, bench, chain, crosscheck, demo, simulate, survey
+    from gimwatch.cli import analyze, bench, chain, crosscheck, demo, simulate, stress, survey
 
-    modules = (chain, analyze, crosscheck, simulate, survey, bench, demo)
+    modules = (chain, analyze, crosscheck, simulate, survey, stress, bench, demo)
     return {module.NAME: module for module in modules}
 
 

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
 from gimwatch.cli._progress import ProgressBar
-from gimwatch.scene import load_scene
+from gimwatch.scene import BACKENDS, load_scene
 from gimwatch.simresults import summarize, write_simulation
 from gimwatch.simulate import Simulation
 
@@ -21,11 +22,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "-o", "--output", help="results folder (default: results/<scene name> next to the cwd)"
     )
+    parser.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        help="dynamics backend instead of the scene's [dynamics] backend (denoc: the O(n) path "
+        "for long fixed-base chains; chosen anyway above nv = 400)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     """Validate, simulate, write; report the status on stderr and a summary on stdout."""
     scene = load_scene(args.scene)
+    if args.backend is not None:
+        scene = dataclasses.replace(scene, backend=args.backend)
     simulation = Simulation(scene)  # every error that needs the robot is raised here
     output = Path(args.output) if args.output else Path("results") / Path(args.scene).stem
     bar = ProgressBar(f"{simulation.robot.name}")

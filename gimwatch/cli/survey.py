@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
@@ -11,6 +12,7 @@ from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.errors import GimwatchError, OutputError
 from gimwatch.survey import run_survey
 from gimwatch.survey_report import write_survey
+from gimwatch.survey_trajectory import TrajectorySettings
 
 NAME = "survey"
 HELP = "does the diagonal ratio track kappa? a report over many robots and configurations"
@@ -45,7 +47,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--chunk-size", type=positive_int, default=50, metavar="N", help="samples per task"
     )
+    parser.add_argument(
+        "--trajectory",
+        action="store_true",
+        help="also simulate short runs falling under gravity and watch kappa and delta along them",
+    )
+    parser.add_argument(
+        "--duration",
+        type=_positive_seconds,
+        default=TrajectorySettings.duration_s,
+        metavar="S",
+        help="length of each simulated run in seconds (with --trajectory)",
+    )
+    parser.add_argument(
+        "--runs",
+        type=positive_int,
+        default=TrajectorySettings.count,
+        metavar="N",
+        help="simulated runs per robot, from random samples 1..N (with --trajectory)",
+    )
     parser.add_argument("-o", "--output", default="survey-output", help="output folder")
+
+
+def _positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text!r}")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -55,6 +86,13 @@ def run(args: argparse.Namespace) -> int:
     output = Path(args.output)
     if output.exists() and not output.is_dir():  # fail before the work, not after it
         raise OutputError(str(output), "is a file, not a folder; give a folder name")
+    trajectories = None
+    if args.trajectory:
+        dt = TrajectorySettings.dt_s  # samples fall on RK4 steps: a whole number of dt
+        sample_s = max(1, round(min(TrajectorySettings.sample_s, args.duration / 10) / dt)) * dt
+        trajectories = TrajectorySettings(
+            count=args.runs, duration_s=args.duration, sample_s=sample_s
+        )
     start = time.perf_counter()
     # disable=None: the bar shows on a terminal only, so logs and pipes get no carriage returns
     with tqdm(
@@ -74,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
             workers=args.workers,
             scheduler=args.scheduler,
             progress=progress,
+            trajectories=trajectories,
         )
     wall_time_s = time.perf_counter() - start
     if not result.robots and result.failures and not result.interrupted:
@@ -90,9 +129,16 @@ def run(args: argparse.Namespace) -> int:
             r.spearman,
             r.alpha_delta_rel_error_median,
         ]
+        + (
+            []
+            if r.trajectories is None
+            else [r.trajectories.pearson_log_median, r.trajectories.alpha_delta_rel_error_median]
+        )
         for r in result.robots
     ]
     headers = ["robot", "nv", "samples", "kappa med", "kappa max", "pearson", "spearman", "ad err"]
+    if trajectories is not None:
+        headers += ["run pearson", "run ad err"]
     if rows:
         print(table(headers, rows))
     for failure in result.failures:

@@ -86,7 +86,7 @@ class ConfigurationState:
         self.model = model
         self.q = q
         m = model
-        self.rotation, self.origin, self.axis_world = compiled.kinematics(
+        self.rotation, self.origin, self.reach, self.axis_world = compiled.kinematics(
             q, m._parent, m._joint_type, m._axis, m._rotation, m._translation
         )
         self.body_mass, self.com_offset = compiled.body_mass_matrices(
@@ -97,7 +97,7 @@ class ConfigurationState:
         """Diag M(q) = p_iᵀ M̃_i p_i (Shah & Saha 2013, Eqs. 11–12), O(n)."""
         m = self.model
         return compiled.composite_diagonal(
-            m._parent, m._joint_type, self.origin, self.axis_world, self.body_mass
+            m._parent, m._joint_type, self.reach, self.axis_world, self.body_mass
         )
 
     def inverse_dynamics(
@@ -108,7 +108,7 @@ class ConfigurationState:
         return compiled.inverse_dynamics(
             m._parent,
             m._joint_type,
-            self.origin,
+            self.reach,
             self.axis_world,
             self.com_offset,
             self.rotation,
@@ -124,10 +124,10 @@ class ConfigurationState:
         return self.inverse_dynamics(np.zeros(self.model.nv), x, gravity=_NO_GRAVITY)
 
     @cached_property
-    def _factor(self) -> tuple[np.ndarray, np.ndarray]:
+    def _factor(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         m = self.model
         return compiled.articulated_factor(
-            m._parent, m._joint_type, self.origin, self.axis_world, self.body_mass
+            m._parent, m._joint_type, self.reach, self.axis_world, self.body_mass
         )
 
     def pivots(self) -> np.ndarray:
@@ -136,8 +136,12 @@ class ConfigurationState:
 
     def solve(self, tau: npt.ArrayLike) -> np.ndarray:
         """M(q)⁻¹ τ by the articulated-body recursion, O(n); the factor is cached."""
+        zeros = np.zeros(self.model.nv)
+        return self._articulated(zeros, tau, _NO_GRAVITY)
+
+    def _articulated(self, v: np.ndarray, tau: npt.ArrayLike, gravity: np.ndarray) -> np.ndarray:
         m = self.model
-        u_vectors, pivots = self._factor
+        u_vectors, pivots, articulated = self._factor
         if not np.all(pivots > 0):
             k = int(np.flatnonzero(~(pivots > 0))[-1])
             raise ConditioningError(
@@ -147,19 +151,25 @@ class ConfigurationState:
         return compiled.articulated_solve(
             m._parent,
             m._joint_type,
-            self.origin,
+            self.reach,
             self.axis_world,
+            self.com_offset,
+            self.rotation,
+            m._mass,
+            m._inertia,
             u_vectors,
             pivots,
+            articulated,
+            np.asarray(v, dtype=float),
             np.asarray(tau, dtype=float),
+            np.asarray(gravity, dtype=float),
         )
 
     def forward_dynamics(
         self, v: npt.ArrayLike, tau: npt.ArrayLike, *, gravity: npt.ArrayLike = (0.0, 0.0, -9.81)
     ) -> np.ndarray:
-        """q̈ = M⁻¹ (τ - bias), bias = C v - g from inverse dynamics at q̈ = 0; O(n)."""
-        bias = self.inverse_dynamics(v, np.zeros(self.model.nv), gravity=gravity)
-        return self.solve(np.asarray(tau, dtype=float) - bias)
+        """q̈ = M⁻¹ (τ - C v + g) by the articulated-body algorithm, O(n)."""
+        return self._articulated(np.asarray(v, dtype=float), tau, np.asarray(gravity, dtype=float))
 
     def dense(self) -> np.ndarray:
         """The dense M(q), one column per M·e_k: O(n²) work — for checks on small n."""
