@@ -43,6 +43,7 @@ FIXED_STEP_METHODS = ("RK4", "semi-implicit-euler")
 BACKENDS = ("aba", "crba-cholesky", "denoc")
 METRIC_NAMES = (
     "kappa",
+    "kappa_lanczos",
     "diagonal_ratio",
     "scaled_diagonal_ratio",
     "pivot_ratio_forward",

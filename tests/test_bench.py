@@ -1,4 +1,5 @@
 import csv
+import importlib
 import io
 import json
 
@@ -23,14 +24,19 @@ def quick_run(tmp_path_factory):
 def test_quick_run_writes_every_file(quick_run):
     code, out = quick_run
     assert code == 0
-    assert {"conditioning", "estimators", "accuracy"} <= set(RUNNABLE)
-    for name in ("conditioning", "estimators", "accuracy"):
+    assert set(RUNNABLE) == set(SECTIONS)  # simulation, watch and DeNOC have landed
+    for name in RUNNABLE:
+        module = importlib.import_module(SECTIONS[name].module)
+        if not hasattr(module, "COLUMNS"):  # sections with several tables of their own
+            assert list(out.glob(f"{name}_*.csv")), name
+            continue
         rows = list(csv.DictReader(io.StringIO((out / f"{name}.csv").read_text())))
-        module = __import__(f"gimwatch.bench.{name}", fromlist=["COLUMNS"])
         assert tuple(rows[0]) == module.COLUMNS
         record = json.loads((out / f"{name}.json").read_text())
         assert record["columns"] == list(module.COLUMNS) and len(record["rows"]) == len(rows)
-    for png in ("conditioning_cost.png", "estimators_pareto.png", "accuracy_vs_kappa.png"):
+    pngs = ("conditioning_cost", "estimators_pareto", "accuracy_vs_kappa", "dynamics_cost")
+    pngs += ("work_precision", "watch_cost", "denoc_cost")
+    for png in (f"{name}.png" for name in pngs):
         assert (out / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     report = (out / "report.md").read_text()
     for needle in ("Pinocchio", "NumPy", "SciPy", "CPU:", "date:", "BLAS", "quick run"):
@@ -53,6 +59,37 @@ def test_quick_run_measures_what_it_claims(quick_run):
             assert float(r["rel_error"]) < 1e-6
     accuracy = list(csv.DictReader(io.StringIO((out / "accuracy.csv").read_text())))
     assert all(float(r["rel_error"]) < 1e-10 for r in accuracy)
+
+
+def _rows(out, name):
+    return list(csv.DictReader(io.StringIO((out / f"{name}.csv").read_text())))
+
+
+def test_quick_simulation_sections_measure_what_they_claim(quick_run):
+    _, out = quick_run
+    from gimwatch.backends import BACKENDS
+    from gimwatch.watch import METRICS
+
+    assert {r["backend"] for r in _rows(out, "dynamics")} == set(BACKENDS)
+    watches = {r["watch"]: r for r in _rows(out, "watch")}
+    assert set(watches) == {"none", "delta", "alpha_delta", "kappa_eig", "kappa_lanczos"}
+    assert "kappa_lanczos" in METRICS and float(watches["none"]["sample_us"]) == 0
+    assert all(float(r["sample_us"]) > 0 for k, r in watches.items() if k != "none")
+    swing = [r for r in _rows(out, "estimators") if r["sweep"] == "swing"]
+    assert swing and all(float(r["median_ratio"]) <= 1 for r in swing if r["estimator"] == "delta")
+    assert {r["quantity"] for r in _rows(out, "denoc")} >= {"gim", "forward_dynamics"}
+    runs = _rows(out, "integrators")
+    assert {r["simulator"] for r in runs} == {"gimwatch", "mujoco"}
+    # Same URDF, same RK4, same steps: gimwatch and MuJoCo land on the same final state,
+    # and halving the step shrinks RK4's error about 16x.
+    rk4 = {
+        (r["simulator"], float(r["dt_s"])): float(r["error_rad"])
+        for r in runs
+        if r["method"] == "RK4"
+    }
+    for (_, dt), error in rk4.items():
+        assert error == pytest.approx(rk4[("mujoco", dt)], rel=1e-3)
+    assert 8 < rk4[("gimwatch", 0.01)] / rk4[("gimwatch", 0.005)] < 32
 
 
 def test_unknown_section_is_one_line_exit_2(capsys):

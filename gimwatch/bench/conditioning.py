@@ -20,17 +20,16 @@ import gc
 from functools import partial
 
 import numpy as np
-import pinocchio as pin
 import scipy.linalg
 
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import plot_cost_vs_n
 from gimwatch.bench.report import markdown_table
-from gimwatch.bench.timing import time_call
+from gimwatch.bench.timing import data_if_it_fits, time_call
 from gimwatch.conditioning import condition_estimate_1norm, condition_number, diagonal_ratio
 from gimwatch.inertia import gim, gim_diagonal
 from gimwatch.matrix_free import kappa_matrix_free
-from gimwatch.robots import DATA_NV_LIMIT, load_robot, random_configurations
+from gimwatch.robots import load_robot, random_configurations
 
 __all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "run"]
 
@@ -48,29 +47,6 @@ COLUMNS = (
     "rel_error",
     "products",
 )
-#: Bytes of a Pinocchio Data for a chain of nv bodies, fitted on nv = 100 … 300.
-_DATA_BYTES_AT_300 = 1.25e9
-
-
-def _available_bytes() -> float:
-    try:
-        with open("/proc/meminfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return float("inf")
-
-
-def _data_for(robot) -> pin.Data | None:
-    """A Data for this size, or None when it would take more than half the free memory."""
-    if robot.nv <= DATA_NV_LIMIT:
-        return robot.new_data()
-    needed = _DATA_BYTES_AT_300 * (robot.nv / 300) ** 3
-    if needed > 0.5 * _available_bytes():
-        return None
-    return robot.model.createData()  # deliberately past the library's limit, freed below
 
 
 def _methods(robot, q, data) -> dict:
@@ -107,7 +83,7 @@ def run(context: BenchContext) -> SectionResult:
     skipped = []
     for n in sizes:
         robot = load_robot(f"chain:{n}")
-        data = _data_for(robot)
+        data = data_if_it_fits(robot)
         if data is None:
             skipped.append(n)
             context.progress(f"  n = {n}: skipped, a Pinocchio Data would not fit in memory")

@@ -2,12 +2,13 @@
 
 Along seeded sweeps of configurations, every estimator is compared with the exact κ₂
 (CRBA + ``eigvalsh``) at each sample (relative error |est − κ|/κ, median and max), and its
-cost per evaluation is timed on a few samples (median). Two sweeps per robot:
+cost per evaluation is timed on a few samples (median). Sweeps:
 
 * ``random`` — independent configurations drawn uniformly within the joint limits;
-* ``walk`` — a seeded random walk (steps of 0.05 rad, clipped to the limits), a stand-in
-  for a smooth trajectory until the swinging-chain simulations of ``gimwatch.simulate``
-  plug in here (:data:`TRAJECTORY_HOOK`).
+* ``swing`` — for the paper's 4-, 10- and 20-link chains, the samples of their swinging
+  trajectories (``scenes/chain_<n>.toml``: straight and horizontal at rest under gravity,
+  DOP853 at 1e-10, the first :data:`SWING_DURATION_S` seconds), where κ sweeps from its
+  straight-chain maximum through folded configurations.
 
 Estimators (Shah & Saha 2013 and the free Rayleigh bounds, since M_ii = e_iᵀ M e_i):
 
@@ -23,12 +24,11 @@ Estimators (Shah & Saha 2013 and the free Rayleigh bounds, since M_ii = e_iᵀ M
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 import pinocchio as pin
 
 from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench.integrators import chain_scene_table
 from gimwatch.bench.plots import plot_pareto
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
@@ -41,8 +41,10 @@ from gimwatch.conditioning import (
 from gimwatch.inertia import gim, gim_diagonal
 from gimwatch.matrix_free import kappa_matrix_free
 from gimwatch.robots import Robot, load_robot, random_configurations
+from gimwatch.scene import parse_scene
+from gimwatch.simulate import run_scene
 
-__all__ = ["COLUMNS", "ESTIMATORS", "TRAJECTORY_HOOK", "run"]
+__all__ = ["COLUMNS", "ESTIMATORS", "SWING_DURATION_S", "run"]
 
 FULL_ROBOTS = ("chain:4", "chain:10", "chain:20", "ur5", "panda", "talos_arm", "solo12")
 QUICK_ROBOTS = ("chain:4", "ur5")
@@ -69,22 +71,18 @@ ESTIMATORS = (
     "pocon",
     "lanczos_warm",
 )
-#: Where the along-trajectory sweeps (the paper's swinging 4-, 10-, 20-link chains) plug in:
-#: a function ``(robot, samples, seed) -> array (samples, nq)`` from gimwatch.simulate.
-TRAJECTORY_HOOK: dict[str, Callable] = {}
-WALK_STEP_RAD = 0.05
+SWING_DURATION_S = 2.0
+SWING_CHAINS = {"chain:4": 4, "chain:10": 10, "chain:20": 20}
 
 
-def _walk(robot: Robot, count: int, seed: int) -> np.ndarray:
-    rng = np.random.default_rng(seed)
-    q = random_configurations(robot, 1, seed=seed)[0]
-    lower = np.maximum(robot.model.lowerPositionLimit, -np.pi)
-    upper = np.minimum(robot.model.upperPositionLimit, np.pi)
-    qs = [q]
-    for _ in range(count - 1):
-        q = np.clip(q + rng.normal(0.0, WALK_STEP_RAD, robot.nq), lower, upper)
-        qs.append(q)
-    return np.array(qs)
+def _swing(n: int, count: int, duration_s: float) -> np.ndarray:
+    """Configurations at ``count`` samples of the swinging n-link chain (scene file)."""
+    table = chain_scene_table(n, duration_s=duration_s)
+    table["sample"] = duration_s / (count - 1)
+    table["watch"] = {"metrics": []}
+    trajectory = run_scene(parse_scene(table, source=f"<bench estimators chain_{n}>"))
+    trajectory.raise_for_status()
+    return trajectory.q
 
 
 class _Estimators:
@@ -128,10 +126,9 @@ def _sweep(context: BenchContext, table: Table, spec: str, sweep: str, count: in
     data = robot.new_data()
     if sweep == "random":
         qs = random_configurations(robot, count, seed=context.seed)
-    elif sweep == "walk":
-        qs = _walk(robot, count, context.seed)
     else:
-        qs = TRAJECTORY_HOOK[sweep](robot, count, context.seed)
+        duration = 0.2 if context.quick else SWING_DURATION_S
+        qs = _swing(SWING_CHAINS[spec], count, duration)
     kappas = np.array([condition_number(gim(robot, q, data=data)) for q in qs])
     estimators = _Estimators(robot, data, qs[0])
     repeats, min_round = (3, 0.001) if context.quick else (5, 0.01)
@@ -189,11 +186,11 @@ def run(context: BenchContext) -> SectionResult:
     count = 6 if context.quick else 200
     table = Table("estimators", COLUMNS)
     for spec in robots:
-        for sweep in ("random", "walk", *TRAJECTORY_HOOK):
+        for sweep in ("random", "swing") if spec in SWING_CHAINS else ("random",):
             context.progress(f"  {spec}: {sweep} sweep of {count} samples")
             _sweep(context, table, spec, sweep, count)
     figure = plot_pareto(
-        [r for r in table.rows if r["sweep"] == "walk"], context.output / "estimators_pareto.png"
+        [r for r in table.rows if r["sweep"] == "swing"], context.output / "estimators_pareto.png"
     )
     by_estimator = []
     for name in ESTIMATORS:
@@ -217,7 +214,10 @@ def run(context: BenchContext) -> SectionResult:
         "cost_vs_kappa": "cost / cost of κ",
     }
     text = [
-        f"Robots {', '.join(robots)}; {count} samples per sweep (random and walk). Errors are "
+        f"Robots {', '.join(robots)}; {count} samples per sweep: random configurations for "
+        "every robot, and for the chains also the first "
+        f"{0.2 if context.quick else SWING_DURATION_S:g} s of their swinging trajectories "
+        "(`swing`, the Pareto plot). Errors are "
         "relative to the exact κ₂ at each sample; the cost is the median time per evaluation "
         "divided by that of κ through CRBA + `eigvalsh` on the same robot (medians over robots "
         "and sweeps).",

@@ -13,7 +13,15 @@ import numpy as np
 
 from gimwatch.results import write_bytes_atomic
 
-__all__ = ["plot_accuracy_vs_kappa", "plot_cost_vs_n", "plot_pareto"]
+__all__ = [
+    "plot_accuracy_vs_kappa",
+    "plot_cost_vs_n",
+    "plot_denoc_cost",
+    "plot_dynamics_cost",
+    "plot_pareto",
+    "plot_watch_cost",
+    "plot_work_precision",
+]
 
 EPS = float(np.finfo(float).eps)
 
@@ -93,4 +101,108 @@ def plot_accuracy_vs_kappa(rows: list[dict], path: Path) -> Path:
     ax.set_title("Forward-dynamics accuracy vs conditioning")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
+    return _save(figure, path)
+
+
+def plot_watch_cost(rows: list[dict], path: Path) -> Path:
+    """One watch sample's cost as a fraction of a bare simulation step, per n and watch."""
+    figure = _figure()
+    ax = figure.add_subplot()
+    watches = [w for w in dict.fromkeys(r["watch"] for r in rows) if w != "none"]
+    ns = sorted({r["n"] for r in rows})
+    width = 0.8 / max(len(watches), 1)
+    for i, watch in enumerate(watches):
+        values = [
+            next(r["sample_vs_step"] for r in rows if r["n"] == n and r["watch"] == watch)
+            for n in ns
+        ]
+        ax.bar(np.arange(len(ns)) + i * width, np.array(values) * 100, width, label=watch)
+    ax.set_xticks(np.arange(len(ns)) + width * (len(watches) - 1) / 2, [f"n = {n}" for n in ns])
+    ax.set_yscale("log")
+    ax.set_ylabel("one watch sample / one bare RK4+ABA step (%)")
+    ax.set_title("What the watch costs (a sample every step; amortize by the sampling rate)")
+    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(figure, path)
+
+
+def plot_dynamics_cost(rows: list[dict], path: Path) -> Path:
+    """Forward-dynamics cost per call against n, one line per backend, log-log."""
+    figure = _figure()
+    ax = figure.add_subplot()
+    for backend in dict.fromkeys(r["backend"] for r in rows):
+        points = sorted(
+            (r["n"], r["call_us"])
+            for r in rows
+            if r["backend"] == backend and np.isfinite(r["call_us"])
+        )
+        if points:
+            ns, us = zip(*points, strict=True)
+            ax.loglog(ns, us, "o-", label=backend, markersize=4)
+    ax.set_xlabel("n (links of the paper chain)")
+    ax.set_ylabel("forward dynamics, median µs per call")
+    ax.set_title("Dynamics backends: cost of one q̈ evaluation")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(figure, path)
+
+
+def plot_denoc_cost(rows: list[dict], path: Path) -> Path:
+    """DeNOC / Pinocchio time ratio per quantity against n."""
+    figure = _figure()
+    ax = figure.add_subplot()
+    for quantity in dict.fromkeys(r["quantity"] for r in rows):
+        points = sorted(
+            (r["n"], r["ratio"])
+            for r in rows
+            if r["quantity"] == quantity and np.isfinite(r["ratio"])
+        )
+        if points:
+            ns, ratios = zip(*points, strict=True)
+            ax.loglog(ns, ratios, "o-", label=quantity, markersize=4)
+    ax.set_xlabel("n (links, spatial chain)")
+    ax.set_ylabel("DeNOC time / Pinocchio time")
+    ax.set_title("DeNOC (NumPy) against Pinocchio (C++)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    return _save(figure, path)
+
+
+def plot_work_precision(rows: list[dict], path: Path) -> Path:
+    """Final-state error against wall time, one panel per chain, one line per method."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.figure import Figure
+
+    chains = list(dict.fromkeys(r["n"] for r in rows))
+    figure = Figure(figsize=(5.0 * len(chains), 4.5), layout="constrained")
+    axes = figure.subplots(1, len(chains), squeeze=False)[0]
+    styles = {}
+    for ax, n in zip(axes, chains, strict=True):
+        curves = dict.fromkeys((r["simulator"], r["method"]) for r in rows if r["n"] == n)
+        for simulator, method in curves:
+            curve = [
+                r
+                for r in rows
+                if (r["n"], r["simulator"], r["method"]) == (n, simulator, method)
+                and np.isfinite(r["error_rad"])
+            ]
+            if not curve:
+                continue
+            # in order of the error control (loosest tolerance or largest step first),
+            # not of the measured (noisy) wall time
+            curve.sort(key=lambda r: -(r["rtol"] if np.isfinite(r["rtol"]) else r["dt_s"]))
+            points = [(r["wall_s"], max(r["error_rad"], 1e-16)) for r in curve]
+            label = f"{simulator} {method}"
+            color = styles.setdefault(label, f"C{len(styles) % 10}")
+            x, y = zip(*points, strict=True)
+            dashed = "--" if simulator == "mujoco" else "-"
+            ax.loglog(x, y, "o" + dashed, color=color, label=label, markersize=3)
+        ax.axhline(1e-10, color="k", lw=0.8, ls=":")
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("final-state error, max |q - q_ref| (rad)")
+        ax.set_title(f"{n}-link swinging chain")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
     return _save(figure, path)

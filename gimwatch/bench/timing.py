@@ -18,7 +18,15 @@ import numpy as np
 import scipy.linalg
 from threadpoolctl import threadpool_info, threadpool_limits
 
-__all__ = ["Timing", "blas_thread_ratio", "thread_settings", "time_call"]
+from gimwatch.robots import DATA_NV_LIMIT, Robot
+
+__all__ = [
+    "Timing",
+    "blas_thread_ratio",
+    "data_if_it_fits",
+    "thread_settings",
+    "time_call",
+]
 
 
 @dataclass(frozen=True)
@@ -113,3 +121,34 @@ def blas_thread_ratio(n: int = 100, *, seed: int = 0, quick: bool = False) -> di
         "all_threads_s": many.median_s,
         "ratio": many.median_s / one.median_s,
     }
+
+
+#: Bytes of a Pinocchio Data for a chain of nv bodies, fitted on nv = 100 … 300.
+_DATA_BYTES_AT_300 = 1.25e9
+
+
+def _available_bytes() -> float:
+    try:
+        with open("/proc/meminfo", encoding="utf-8") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return float("inf")
+
+
+def data_if_it_fits(robot: Robot):
+    """A Pinocchio Data for a benchmark, or None when it would not fit in memory.
+
+    Data grows as nv³ (≈ 1.25 GB at nv = 300). Up to ``DATA_NV_LIMIT`` this is
+    ``robot.new_data()``; above, a Data is built (deliberately past the library's limit)
+    only when its estimated size is below half the available memory. The caller frees it
+    before the next size.
+    """
+    if robot.nv <= DATA_NV_LIMIT:
+        return robot.new_data()
+    needed = _DATA_BYTES_AT_300 * (robot.nv / 300) ** 3
+    if needed > 0.5 * _available_bytes():
+        return None
+    return robot.model.createData()
