@@ -216,9 +216,6 @@ def run_case(case: StressCase, *, seed: int = 0, simulate: bool = False) -> Stre
     if simulate and case.no_simulation:
         notes.append(f"not simulated: {case.no_simulation}")
         simulate = False
-    if simulate and nv > DATA_NV_LIMIT:
-        notes.append("not simulated: the aba backend needs a Pinocchio Data")
-        simulate = False
     if simulate:
         sim_status, drift = simulate_case(case, robot, q)
     within = all(
@@ -277,6 +274,8 @@ def simulate_case(case: StressCase, robot: Robot, q: np.ndarray) -> tuple[str, f
         table["integrator"] = {"method": "RK4", "dt": 1e-3}
     else:
         table["integrator"] = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10}
+    if robot.nv > DATA_NV_LIMIT:  # no Pinocchio Data: the O(n) DeNOC recursions
+        table["dynamics"] = {"backend": "denoc"}
     scene = parse_scene(table, source=f"<stress {case.name}>")
     trajectory = Simulation(scene, robot=robot).run()
     return trajectory.status, trajectory.energy_drift()
