@@ -140,27 +140,13 @@ def _gimwatch_runs(context, table, n, scene, q_ref, v_ref, tolerances, steps, ca
             prev_dt, prev_wall = last_fixed[method]
             if prev_wall * prev_dt / dt > cap_s:
                 capped[method] = f"skipped: predicted {prev_wall * prev_dt / dt:.0f} s > cap"
-        if method in capped:
-            _row(
-                table,
-                n,
-                "gimwatch",
-                method,
-                rtol,
-                dt,
-                q_ref,
-                v_ref,
-                energy_drift=np.nan,
-                wall_s=np.nan,
-                evaluations=0,
-                steps=0,
-                status=capped[method],
-            )
-            continue
-        context.progress(f"  chain:{n}: gimwatch {method} {label}")
-        result = _simulate(scene, integrator, cap_s)
-        if result is None:
-            capped[method] = f"aborted at the {cap_s:g} s cap (or a looser tolerance was)"
+        result = None
+        if method not in capped:
+            context.progress(f"  chain:{n}: gimwatch {method} {label}")
+            result = _simulate(scene, integrator, cap_s)
+            if result is None:
+                capped[method] = f"aborted at the {cap_s:g} s cap (or a looser tolerance was)"
+        if result is None:  # skipped or aborted: a row saying why, without numbers
             _row(
                 table,
                 n,

@@ -126,24 +126,27 @@ def plot_watch_cost(rows: list[dict], path: Path) -> Path:
     return _save(figure, path)
 
 
+def _loglog_lines(rows: list[dict], series: str, value: str, ax) -> None:
+    """One log-log line of ``value`` against n per distinct ``series`` (finite points only)."""
+    for name in dict.fromkeys(r[series] for r in rows):
+        points = sorted(
+            (r["n"], r[value]) for r in rows if r[series] == name and np.isfinite(r[value])
+        )
+        if points:
+            ns, values = zip(*points, strict=True)
+            ax.loglog(ns, values, "o-", label=name, markersize=4)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+
+
 def plot_dynamics_cost(rows: list[dict], path: Path) -> Path:
     """Forward-dynamics cost per call against n, one line per backend, log-log."""
     figure = _figure()
     ax = figure.add_subplot()
-    for backend in dict.fromkeys(r["backend"] for r in rows):
-        points = sorted(
-            (r["n"], r["call_us"])
-            for r in rows
-            if r["backend"] == backend and np.isfinite(r["call_us"])
-        )
-        if points:
-            ns, us = zip(*points, strict=True)
-            ax.loglog(ns, us, "o-", label=backend, markersize=4)
+    _loglog_lines(rows, "backend", "call_us", ax)
     ax.set_xlabel("n (links of the paper chain)")
     ax.set_ylabel("forward dynamics, median µs per call")
     ax.set_title("Dynamics backends: cost of one q̈ evaluation")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
     return _save(figure, path)
 
 
@@ -151,20 +154,10 @@ def plot_denoc_cost(rows: list[dict], path: Path) -> Path:
     """DeNOC / Pinocchio time ratio per quantity against n."""
     figure = _figure()
     ax = figure.add_subplot()
-    for quantity in dict.fromkeys(r["quantity"] for r in rows):
-        points = sorted(
-            (r["n"], r["ratio"])
-            for r in rows
-            if r["quantity"] == quantity and np.isfinite(r["ratio"])
-        )
-        if points:
-            ns, ratios = zip(*points, strict=True)
-            ax.loglog(ns, ratios, "o-", label=quantity, markersize=4)
+    _loglog_lines(rows, "quantity", "ratio", ax)
     ax.set_xlabel("n (links, spatial chain)")
     ax.set_ylabel("DeNOC time / Pinocchio time")
-    ax.set_title("DeNOC (NumPy) against Pinocchio (C++)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.set_title("DeNOC against Pinocchio (C++)")
     return _save(figure, path)
 
 
