@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -18,7 +19,7 @@ from gimwatch.errors import ConditioningError
 from gimwatch.inertia import gim
 from gimwatch.robots import Robot, as_configuration
 
-__all__ = ["GimAnalysis", "analyze_configuration", "check_robot_gim"]
+__all__ = ["GimAnalysis", "analyze_configuration", "check_massless", "check_robot_gim"]
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,24 @@ class GimAnalysis:
         return record
 
 
+def check_massless(
+    diagonal: np.ndarray, dof_names: Sequence[str], *, name: str, source: str
+) -> None:
+    """Raise if a coordinate moves no mass (M_kk <= 0: M singular), naming the coordinates.
+
+    Raises:
+        ConditioningError: ``source: M(q) of name is singular: ... (coordinates); remedy``.
+    """
+    massless = [dof_names[k] for k in np.flatnonzero(~(np.asarray(diagonal) > 0))]
+    if massless:
+        raise ConditioningError(
+            f"{source}: M(q) of {name} is singular: "
+            f"{len(massless)} coordinate(s) move no mass "
+            f"({', '.join(massless[:4])}{', ...' if len(massless) > 4 else ''}); "
+            "give the links they move an <inertial>"
+        )
+
+
 def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
     """Check M(q) of ``robot`` like :func:`~gimwatch.conditioning.check_gim`, naming joints.
 
@@ -74,14 +93,7 @@ def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
         ConditioningError: A coordinate moves no mass (M singular), naming the URDF and the
             coordinates; or M is not a valid GIM.
     """
-    massless = [robot.dof_names[k] for k in np.flatnonzero(~(np.diag(M) > 0))]
-    if massless:
-        raise ConditioningError(
-            f"{robot.source}: M(q) of {robot.name} is singular: "
-            f"{len(massless)} coordinate(s) move no mass "
-            f"({', '.join(massless[:4])}{', ...' if len(massless) > 4 else ''}); "
-            "give the links they move an <inertial>"
-        )
+    check_massless(np.diag(M), robot.dof_names, name=robot.name, source=robot.source)
     return check_gim(M)
 
 

@@ -15,10 +15,10 @@ from collections.abc import Collection
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.analysis import GimAnalysis
+from gimwatch.analysis import GimAnalysis, check_massless
 from gimwatch.chains import ChainSpec
 from gimwatch.denoc import DenocModel, matrix_free_kappa
-from gimwatch.errors import ConditioningError, InputError
+from gimwatch.errors import InputError
 
 __all__ = ["LINEAR_METRICS", "analyze_linear", "chain_configurations"]
 
@@ -66,12 +66,7 @@ def analyze_linear(
         raise InputError("metrics", f"among {LINEAR_METRICS} on the O(n) path", unknown)
     state = model.state(q)
     diag = model.to_public(state.diagonal())
-    massless = [model.joint_names[k] for k in np.flatnonzero(~(diag > 0))]
-    if massless:
-        raise ConditioningError(
-            f"M(q) of {name} is singular: {len(massless)} coordinate(s) move no mass "
-            f"({', '.join(massless[:4])})"
-        )
+    check_massless(diag, model.joint_names, name=name, source=model.tree.source)
     kappa = lambda_min = lambda_max = backward = None
     if "kappa" in metrics:
         found = matrix_free_kappa(state, seed=seed, rtol=rtol)

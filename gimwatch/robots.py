@@ -32,6 +32,7 @@ from gimwatch.errors import InputError, RobotError, URDFError
 
 __all__ = [
     "Robot",
+    "chain_robot",
     "example_robot_names",
     "load_robot",
     "neutral_configuration",
@@ -296,6 +297,20 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
         floating=floating,
         chain=chain,
     )
+
+
+def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
+    """A :class:`Robot` for a generated chain of any rods (no Pinocchio Data is built).
+
+    Raises:
+        RobotError: The chain is deeper than Pinocchio's URDF parser can read.
+    """
+    if spec.n > MAX_TREE_DEPTH:
+        raise _too_deep(f"chain:{spec.n}")
+    xml = generate_chain_urdf(spec)
+    source = f"<generated {spec.name}>"
+    model = _build_model(xml, source, floating)
+    return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
 
 
 def neutral_configuration(robot: Robot) -> np.ndarray:

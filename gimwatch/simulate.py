@@ -35,15 +35,14 @@ import pinocchio as pin
 import scipy.integrate
 
 from gimwatch.backends import make_backend
-from gimwatch.chains import chain_spec, generate_chain_urdf
+from gimwatch.chains import chain_spec
 from gimwatch.effects import build_effects, joint_vector
 from gimwatch.errors import GimwatchError, SceneError, SimulationError
 from gimwatch.robots import (
     DATA_NV_LIMIT,
-    MAX_TREE_DEPTH,
     Robot,
-    _too_deep,
     _too_large,
+    chain_robot,
     load_robot,
     neutral_configuration,
 )
@@ -157,20 +156,13 @@ class Trajectory:
 
 
 def _chain_robot(params: dict, floating: bool) -> Robot:
-    from gimwatch.robots import _build_model
-
-    options = {k: v for k, v in params.items() if k != "n"}
     # checked before any URDF is generated: a floating base needs Pinocchio's Data (memory
     # ∝ nv³); a fixed one runs on the O(n) denoc backend, up to the URDF parser's depth
+    # (chain_robot checks that)
     if floating and params["n"] + 6 > DATA_NV_LIMIT:
         raise _too_large(f"chain:{params['n']}", params["n"] + 6)
-    if params["n"] > MAX_TREE_DEPTH:
-        raise _too_deep(f"chain:{params['n']}")
-    spec = chain_spec(params["n"], **options)
-    xml = generate_chain_urdf(spec)
-    source = f"<generated {spec.name}>"
-    model = _build_model(xml, source, floating)
-    return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
+    options = {k: v for k, v in params.items() if k != "n"}
+    return chain_robot(chain_spec(params["n"], **options), floating=floating)
 
 
 def load_scene_robot(scene: Scene) -> Robot:

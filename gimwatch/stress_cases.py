@@ -14,24 +14,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gimwatch.chains import ChainSpec, chain_spec, generate_chain_urdf
-from gimwatch.robots import Robot, load_robot, neutral_configuration
+from gimwatch.chains import ChainSpec, chain_spec
+from gimwatch.robots import Robot, chain_robot, load_robot, neutral_configuration
 
-__all__ = ["CASES", "CHAIN_GRAVITY_M_S2", "ROBOT_GRAVITY_M_S2", "StressCase", "chain_robot"]
+__all__ = ["CASES", "CHAIN_GRAVITY_M_S2", "ROBOT_GRAVITY_M_S2", "StressCase"]
 
 #: Chains lie in the xy-plane at q = 0 (joints about z), gravity in that plane.
 CHAIN_GRAVITY_M_S2 = (0.0, -9.81, 0.0)
 ROBOT_GRAVITY_M_S2 = (0.0, 0.0, -9.81)
-
-
-def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
-    """A :class:`Robot` for a generated chain (no Pinocchio Data is built)."""
-    from gimwatch.robots import _build_model
-
-    xml = generate_chain_urdf(spec)
-    source = f"<generated {spec.name}>"
-    model = _build_model(xml, source, floating)
-    return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
 
 
 @dataclass(frozen=True)

@@ -11,9 +11,9 @@ from gimwatch.cli import main
 from gimwatch.denoc.tree import read_body_tree
 from gimwatch.reference import PlanarChainReference
 from gimwatch.reference_tree import TreeReference
-from gimwatch.robots import load_robot, random_configurations
+from gimwatch.robots import chain_robot, load_robot, random_configurations
 from gimwatch.stress import METHODS, run_case
-from gimwatch.stress_cases import CASES, chain_robot
+from gimwatch.stress_cases import CASES
 
 #: Cases whose 5 s simulation is cheap enough for every test run (the rest: slow marker).
 SIMULATED = {

@@ -16,7 +16,7 @@ from gimwatch.chains import chain_spec
 from gimwatch.conditioning import condition_number, diagonal_ratio
 from gimwatch.crosscheck import denoc_model
 from gimwatch.inertia import gim_diagonal
-from gimwatch.stress_cases import chain_robot
+from gimwatch.robots import chain_robot
 
 
 @st.composite
