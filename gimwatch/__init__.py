@@ -4,20 +4,6 @@ Importing gimwatch does no work: no robot is loaded and nothing is written.
 """
 
 from gimwatch._version import __version__
-from gimwatch.analysis import GimAnalysis, analyze_configuration
-from gimwatch.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
-from gimwatch.conditioning import (
-    ScaledDiagonalRatio,
-    check_gim,
-    condition_estimate_1norm,
-    condition_number,
-    diagonal_ratio,
-    eigenvalues,
-    ldlt_pivots,
-    pivot_ratio_backward,
-    pivot_ratio_forward,
-    udut_pivots,
-)
 from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
 from gimwatch.denoc import DenocModel
 from gimwatch.errors import (
@@ -30,29 +16,43 @@ from gimwatch.errors import (
     SimulationError,
     URDFError,
 )
-from gimwatch.inertia import gim, gim_diagonal
-from gimwatch.matrix_free import (
+from gimwatch.metrics.conditioning import (
+    ScaledDiagonalRatio,
+    check_gim,
+    condition_estimate_1norm,
+    condition_number,
+    diagonal_ratio,
+    eigenvalues,
+    ldlt_pivots,
+    pivot_ratio_backward,
+    pivot_ratio_forward,
+    udut_pivots,
+)
+from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
+from gimwatch.metrics.matrix_free import (
     MatrixFreeKappa,
     gim_inverse_operator,
     gim_operator,
     kappa_matrix_free,
 )
-from gimwatch.reference import PlanarChainReference, planar_reference
-from gimwatch.reference_tree import TreeReference
-from gimwatch.robots import (
+from gimwatch.metrics.watch import Watch, estimator_quality
+from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
+from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.robots import (
     Robot,
     example_robot_names,
     load_robot,
     neutral_configuration,
     random_configurations,
 )
-from gimwatch.scene import Scene, load_scene, parse_scene
-from gimwatch.simresults import summarize, write_simulation
-from gimwatch.simulate import Simulation, Trajectory, run_scene
-from gimwatch.stress import StressResult, run_stress
-from gimwatch.survey import RobotFailure, RobotSurvey, SurveyResult, run_survey
-from gimwatch.survey_report import write_survey
-from gimwatch.watch import Watch, estimator_quality
+from gimwatch.simulation.results_folder import summarize, write_simulation
+from gimwatch.simulation.scene import Scene, load_scene, parse_scene
+from gimwatch.simulation.simulate import Simulation, Trajectory, run_scene
+from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
+from gimwatch.stress.reference_tree import TreeReference
+from gimwatch.stress.suite import StressResult, run_stress
+from gimwatch.survey.report import write_survey
+from gimwatch.survey.run import RobotFailure, RobotSurvey, SurveyResult, run_survey
 
 __all__ = [
     "ChainSpec",

@@ -1,7 +1,7 @@
 """Cross-check of the DeNOC implementation against Pinocchio, robot by robot.
 
 At K seeded random states (q within the joint limits from
-:func:`~gimwatch.robots.random_configurations`; v, a, τ standard normal from a NumPy
+:func:`~gimwatch.model.robots.random_configurations`; v, a, τ standard normal from a NumPy
 generator with the same seed) it compares
 
 * the GIM with ``pinocchio.crba`` (and its O(n) diagonal),
@@ -31,7 +31,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
-from gimwatch.robots import Robot, random_configurations
+from gimwatch.model.robots import Robot, random_configurations
 
 __all__ = ["CrossCheckResult", "crosscheck_robot", "denoc_model"]
 

@@ -16,10 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from gimwatch.results import prepare_directory, write_text_atomic
-from gimwatch.scene import Scene, parse_scene
-from gimwatch.simresults import summarize, versions, write_simulation
-from gimwatch.simulate import Simulation, Trajectory
+from gimwatch.output.atomic import prepare_directory, write_text_atomic
+from gimwatch.simulation.results_folder import summarize, versions, write_simulation
+from gimwatch.simulation.scene import Scene, parse_scene
+from gimwatch.simulation.simulate import Simulation, Trajectory
 
 __all__ = ["PAPER_CHAIN_LENGTHS", "paper_chain_table", "run_demo"]
 
@@ -61,7 +61,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from gimwatch import plots
+    from gimwatch.output import figures as plots
 
     paths = []
 
@@ -138,8 +138,8 @@ def _animation(run: Trajectory, path: Path, *, frame_s: float = 0.05) -> Path:
     import pinocchio as pin
     from matplotlib.animation import PillowWriter
 
-    from gimwatch import plots
-    from gimwatch.robots import load_robot
+    from gimwatch.model.robots import load_robot
+    from gimwatch.output import figures as plots
 
     robot = load_robot(f"chain:{run.q.shape[1]}")
     model, data = robot.model, robot.new_data()

@@ -3,8 +3,8 @@
 import numpy as np
 
 import gimwatch.denoc  # noqa: F401  (fails, not skips, when the DeNOC package is missing)
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import run_scene
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import run_scene
 
 
 def test_denoc_backend_gives_the_aba_trajectory():

@@ -25,12 +25,12 @@ from pathlib import Path
 
 import pytest
 
-from gimwatch.analysis import analyze_configuration
-from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.cli import _commands, get_argument_parser, main
 from gimwatch.errors import GimwatchError, URDFWarning
-from gimwatch.robots import MAX_TREE_DEPTH, MAX_URDF_BYTES, load_robot, neutral_configuration
-from gimwatch.scene import MAX_SCENE_BYTES
+from gimwatch.metrics.dense_analysis import analyze_configuration
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.model.robots import MAX_TREE_DEPTH, MAX_URDF_BYTES, load_robot, neutral_configuration
+from gimwatch.simulation.scene import MAX_SCENE_BYTES
 
 BAD = Path(__file__).parent / "data" / "bad"
 MANIFEST = tomllib.loads((BAD / "MANIFEST.toml").read_text())

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM
 
-from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.cli import main
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
 
 
 def run(capsys, *argv):

@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-import gimwatch.survey
+import gimwatch.survey.run
 from gimwatch.cli import main
 
 
@@ -47,7 +47,7 @@ def test_survey_writes_report_json_csv_and_plots(capsys, tmp_path):
 
 def test_survey_ctrl_c_writes_partial_results_and_exits_130(capsys, tmp_path, monkeypatch):
     calls = []
-    real = gimwatch.survey._survey_chunk
+    real = gimwatch.survey.run._survey_chunk
 
     def interrupted_after_one_chunk(*args):
         calls.append(1)
@@ -55,7 +55,7 @@ def test_survey_ctrl_c_writes_partial_results_and_exits_130(capsys, tmp_path, mo
             raise KeyboardInterrupt
         return real(*args)
 
-    monkeypatch.setattr(gimwatch.survey, "_survey_chunk", interrupted_after_one_chunk)
+    monkeypatch.setattr(gimwatch.survey.run, "_survey_chunk", interrupted_after_one_chunk)
     argv = ["survey", "ur5", "--samples", "9", "--chunk-size", "4", "--workers", "1"]
     code, _, err = run(capsys, *argv, "-o", str(tmp_path))
     assert code == 130 and "interrupted; partial results written" in err

@@ -3,7 +3,8 @@ import pinocchio as pin
 import pytest
 from conftest import paper_matrix
 
-from gimwatch.conditioning import (
+from gimwatch.errors import ConditioningError
+from gimwatch.metrics.conditioning import (
     ScaledDiagonalRatio,
     check_gim,
     condition_estimate_1norm,
@@ -14,9 +15,8 @@ from gimwatch.conditioning import (
     pivot_ratio_forward,
     udut_pivots,
 )
-from gimwatch.errors import ConditioningError
-from gimwatch.inertia import gim
-from gimwatch.robots import load_robot, random_configurations
+from gimwatch.model.inertia import gim
+from gimwatch.model.robots import load_robot, random_configurations
 
 PHI_EQ7 = np.array([-86.6015, -48.7133, -21.6504, -5.4126])
 QDD_EQ8 = np.array([-6.2189, 7.8864, -2.1226, 0.6071])

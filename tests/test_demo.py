@@ -3,9 +3,9 @@ from pathlib import Path
 
 import pytest
 
-from gimwatch.analysis import analyze_configuration
 from gimwatch.demo import PAPER_CHAIN_LENGTHS, paper_chain_table, run_demo
-from gimwatch.robots import load_robot
+from gimwatch.metrics.dense_analysis import analyze_configuration
+from gimwatch.model.robots import load_robot
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 

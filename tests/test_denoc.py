@@ -16,11 +16,11 @@ from conftest import (
     planar_rod_chain_gim,
 )
 
-from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.crosscheck import crosscheck_robot
 from gimwatch.denoc import DenocModel
 from gimwatch.errors import ConditioningError, InputError, URDFError
-from gimwatch.robots import load_robot, random_configurations
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.model.robots import load_robot, random_configurations
 
 DENOC_DIR = Path(__file__).resolve().parents[1] / "gimwatch" / "denoc"
 
@@ -96,8 +96,8 @@ def test_denoc_sources_import_no_pinocchio():
         "numba",
         "yourdfpy",
         "gimwatch.errors",
-        "gimwatch.urdf",
-        "gimwatch.chains",
+        "gimwatch.model.urdf_text",
+        "gimwatch.model.chains",
     }
     for path in sorted(DENOC_DIR.glob("*.py")):
         tree = ast.parse(path.read_text())

@@ -22,9 +22,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gimwatch.errors import GimwatchError
-from gimwatch.scene import load_scene
-from gimwatch.simresults import write_simulation
-from gimwatch.simulate import STATUSES, Simulation
+from gimwatch.simulation.results_folder import write_simulation
+from gimwatch.simulation.scene import load_scene
+from gimwatch.simulation.simulate import STATUSES, Simulation
 
 SEED_SCENE = """robot = "chain:3"
 duration = 0.05

@@ -2,7 +2,7 @@
 
 Mutations drop, duplicate, move or rename elements, drop attributes, give them hostile
 values, and truncate the text. A second property checks that the validation in
-``gimwatch/urdf.py`` is complete: whatever it lets through, Pinocchio's parser (urdfdom)
+``gimwatch/model/urdf_text.py`` is complete: whatever it lets through, Pinocchio's parser (urdfdom)
 builds without complaint, so no urdfdom message ever reaches the user.
 """
 
@@ -17,10 +17,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from gimwatch.analysis import analyze_configuration
-from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.errors import GimwatchError
-from gimwatch.robots import (
+from gimwatch.metrics.dense_analysis import analyze_configuration
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     _example_robot_urdf,
     load_robot,

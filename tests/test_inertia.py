@@ -2,10 +2,10 @@ import numpy as np
 import pytest
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, planar_rod_chain_gim
 
-from gimwatch.chains import chain_spec, generate_chain_urdf
-from gimwatch.conditioning import condition_number, diagonal_ratio
-from gimwatch.inertia import gim, gim_diagonal
-from gimwatch.robots import load_robot, neutral_configuration, random_configurations
+from gimwatch.metrics.conditioning import condition_number, diagonal_ratio
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.robots import load_robot, neutral_configuration, random_configurations
 
 
 def test_straight_paper_chain_matches_closed_form_and_paper_numbers():

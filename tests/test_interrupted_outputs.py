@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 import gimwatch.bench
-import gimwatch.simresults
+import gimwatch.simulation.results_folder
 from gimwatch.bench import SectionResult, Table
 from gimwatch.cli import main
-from gimwatch.simulate import Simulation
+from gimwatch.simulation.simulate import Simulation
 
 SCENE = """robot = "chain:3"
 duration = 0.2
@@ -99,7 +99,7 @@ def test_simulate_interrupted_while_writing_keeps_the_previous_folder(
         raise KeyboardInterrupt
 
     target = "write_npz_atomic" if stage == "npz" else "_plots"
-    monkeypatch.setattr(gimwatch.simresults, target, interrupted)
+    monkeypatch.setattr(gimwatch.simulation.results_folder, target, interrupted)
     code = main(["simulate", str(scene), "-o", str(out)])
     assert code == 130 and capsys.readouterr().err.endswith("gimwatch: interrupted\n")
     assert _tree(out) == before
@@ -110,7 +110,7 @@ def test_simulate_interrupted_while_writing_keeps_the_previous_folder(
 def test_simulate_failing_to_write_keeps_the_previous_folder(previous, monkeypatch, capsys, call):
     """A full disk while writing a file, or a refused rename: one line, the old folder stays."""
     scene, out, before = previous
-    original = getattr(gimwatch.simresults.os, call)
+    original = getattr(gimwatch.simulation.results_folder.os, call)
 
     def broken(*args, **kwargs):
         if call == "replace" and (Path(args[1]) != out or Path(args[0]).name == "previous"):
@@ -118,7 +118,7 @@ def test_simulate_failing_to_write_keeps_the_previous_folder(previous, monkeypat
             return original(*args, **kwargs)
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(gimwatch.simresults.os, call, broken)
+    monkeypatch.setattr(gimwatch.simulation.results_folder.os, call, broken)
     code = main(["simulate", str(scene), "-o", str(out)])
     err = capsys.readouterr().err
     assert code == 2, err
@@ -150,7 +150,7 @@ def test_bench_interrupted_in_a_section_keeps_the_finished_ones(tmp_path, monkey
             return self.outcome
 
     modules = {
-        "gimwatch.bench.conditioning": FakeSection(finished),
+        "gimwatch.bench.conditioning_cost": FakeSection(finished),
         "gimwatch.bench.estimators": FakeSection(KeyboardInterrupt()),
     }
     monkeypatch.setattr(gimwatch.bench.importlib, "import_module", modules.__getitem__)

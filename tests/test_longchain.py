@@ -9,14 +9,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.denoc import DenocModel, chain_body_tree, matrix_free_kappa, read_body_tree
 from gimwatch.errors import BackendWarning
-from gimwatch.longchain import analyze_linear, chain_configurations
-from gimwatch.reference import PlanarChainReference
-from gimwatch.robots import Robot, load_robot, random_configurations
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import run_scene
+from gimwatch.metrics.linear_analysis import analyze_linear, chain_configurations
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.model.robots import Robot, load_robot, random_configurations
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import run_scene
+from gimwatch.stress.reference_planar import PlanarChainReference
 
 SPECS = {
     "paper": chain_spec(12),

@@ -1,11 +1,11 @@
 import numpy as np
 import pytest
 
-from gimwatch.conditioning import condition_number
 from gimwatch.errors import InputError
-from gimwatch.inertia import gim
-from gimwatch.matrix_free import gim_inverse_operator, gim_operator, kappa_matrix_free
-from gimwatch.robots import load_robot, neutral_configuration, random_configurations
+from gimwatch.metrics.conditioning import condition_number
+from gimwatch.metrics.matrix_free import gim_inverse_operator, gim_operator, kappa_matrix_free
+from gimwatch.model.inertia import gim
+from gimwatch.model.robots import load_robot, neutral_configuration, random_configurations
 
 
 @pytest.mark.parametrize("spec", ["chain:7", "ur5", "panda"])

@@ -4,9 +4,9 @@ import pytest
 
 from gimwatch.bench import mujoco_peer
 from gimwatch.errors import InputError
-from gimwatch.robots import load_robot, random_configurations
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import run_scene
+from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import run_scene
 
 GRAVITY = np.array([0.0, -9.81, 0.0])
 

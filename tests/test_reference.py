@@ -6,9 +6,9 @@ import pinocchio as pin
 import pytest
 from conftest import planar_rod_chain_gim
 
-from gimwatch.chains import chain_spec, generate_chain_urdf
 from gimwatch.errors import InputError
-from gimwatch.reference import PlanarChainReference, planar_reference
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
 
 
 def _pinocchio_model(spec, gravity=(0.0, -9.81)):

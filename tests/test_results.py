@@ -4,9 +4,9 @@ import os
 import numpy as np
 import pytest
 
-from gimwatch import results
 from gimwatch.errors import OutputError
-from gimwatch.results import write_json_atomic, write_npz_atomic, write_text_atomic
+from gimwatch.output import atomic as results
+from gimwatch.output.atomic import write_json_atomic, write_npz_atomic, write_text_atomic
 
 
 class _Interrupted(KeyboardInterrupt):

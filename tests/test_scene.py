@@ -4,8 +4,8 @@ import pytest
 
 from gimwatch.cli import main
 from gimwatch.errors import SceneError
-from gimwatch.scene import load_scene, parse_scene
-from gimwatch.simulate import Simulation
+from gimwatch.simulation.scene import load_scene, parse_scene
+from gimwatch.simulation.simulate import Simulation
 
 GOOD = """
 robot = "chain:3"
@@ -145,7 +145,7 @@ def test_errors_needing_the_robot_are_named_when_the_simulation_is_built(old, ne
 
 
 def test_relative_urdf_paths_resolve_against_the_scene_folder(tmp_path):
-    from gimwatch.chains import chain_spec, write_chain_urdf
+    from gimwatch.model.chains import chain_spec, write_chain_urdf
 
     (tmp_path / "robots").mkdir()
     write_chain_urdf(chain_spec(2), tmp_path / "robots" / "two.urdf")

@@ -2,10 +2,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gimwatch.analysis import analyze_configuration
-from gimwatch.robots import load_robot
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import Simulation, run_scene
+from gimwatch.metrics.dense_analysis import analyze_configuration
+from gimwatch.model.robots import load_robot
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import Simulation, run_scene
 
 GRAVITY = {"gravity": {"vector": [0.0, -9.81, 0.0]}}
 ROD_MASS, ROD_LENGTH = 2.2, 1.0
@@ -209,7 +209,7 @@ def test_no_gravity_means_zero_model_gravity_and_no_gravity_term(monkeypatch):
 
 
 def test_undeclared_velocity_effects_are_never_evaluated(monkeypatch):
-    from gimwatch import effects
+    from gimwatch.simulation import effects
 
     counts = {"damping": 0}
     original = effects.Damping.tau

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from gimwatch.errors import SceneError
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import MOST_ACCURATE_BACKEND, RTOL_FLOOR, Simulation, run_scene
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import MOST_ACCURATE_BACKEND, RTOL_FLOOR, Simulation, run_scene
 
 GRAVITY = {"gravity": {"vector": [0.0, -9.81, 0.0]}}
 

@@ -6,14 +6,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gimwatch.chains import chain_spec
 from gimwatch.cli import main
 from gimwatch.denoc.tree import read_body_tree
-from gimwatch.reference import PlanarChainReference
-from gimwatch.reference_tree import TreeReference
-from gimwatch.robots import chain_robot, load_robot, random_configurations
-from gimwatch.stress import METHODS, run_case
-from gimwatch.stress_cases import CASES
+from gimwatch.model.chains import chain_spec
+from gimwatch.model.robots import chain_robot, load_robot, random_configurations
+from gimwatch.stress.cases import CASES
+from gimwatch.stress.reference_planar import PlanarChainReference
+from gimwatch.stress.reference_tree import TreeReference
+from gimwatch.stress.suite import METHODS, run_case
 
 #: Cases whose 5 s simulation is cheap enough for every test run (the rest: slow marker).
 SIMULATED = {

@@ -12,11 +12,11 @@ import scipy.linalg
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gimwatch.chains import chain_spec
-from gimwatch.conditioning import condition_number, diagonal_ratio
 from gimwatch.crosscheck import denoc_model
-from gimwatch.inertia import gim_diagonal
-from gimwatch.robots import chain_robot
+from gimwatch.metrics.conditioning import condition_number, diagonal_ratio
+from gimwatch.model.chains import chain_spec
+from gimwatch.model.inertia import gim_diagonal
+from gimwatch.model.robots import chain_robot
 
 
 @st.composite

@@ -2,10 +2,10 @@ import numpy as np
 import pytest
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM, planar_rod_chain_gim
 
-from gimwatch.analysis import analyze_configuration
-from gimwatch.robots import load_robot, random_configurations
-from gimwatch.survey import DOF_METRICS, METRICS, run_survey, sample_metrics
-from gimwatch.survey_trajectory import FLOATING_REASON, TrajectorySettings
+from gimwatch.metrics.dense_analysis import analyze_configuration
+from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.survey.run import DOF_METRICS, METRICS, run_survey, sample_metrics
+from gimwatch.survey.trajectory import FLOATING_REASON, TrajectorySettings
 
 SPECS = ["chain:4", "ur5", "cassie", "bravo7_gripper", "hector"]
 RUNS = TrajectorySettings(count=2, duration_s=0.2, sample_s=0.02)

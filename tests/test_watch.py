@@ -5,10 +5,10 @@ import pytest
 import scipy.linalg
 from conftest import planar_rod_chain_gim
 
-from gimwatch.robots import load_robot, random_configurations
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import run_scene
-from gimwatch.watch import METRICS, Watch, estimator_quality
+from gimwatch.metrics.watch import METRICS, Watch, estimator_quality
+from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import run_scene
 
 ALL = (
     "kappa",
@@ -56,7 +56,7 @@ def test_every_metric_matches_the_closed_form_gim():
 
 
 def test_metric_registry_is_the_scene_vocabulary():
-    from gimwatch.scene import METRIC_NAMES
+    from gimwatch.simulation.scene import METRIC_NAMES
 
     assert tuple(METRICS) == METRIC_NAMES
 

@@ -9,7 +9,7 @@ import json
 import sys
 from pathlib import Path
 
-from gimwatch.results import write_text_atomic
+from gimwatch.output.atomic import write_text_atomic
 
 BEGIN, END = "<!-- survey-table:begin -->", "<!-- survey-table:end -->"
 

@@ -2,7 +2,7 @@
 
 Each section is a module of this package with ``run(context) -> SectionResult``; the
 :data:`SECTIONS` registry names them, with the modules they need. A section whose module or
-dependencies are missing (the simulation sections before ``gimwatch.simulate`` lands) is
+dependencies are missing (the simulation sections before ``gimwatch.simulation.simulate`` lands) is
 reported as skipped by ``all`` and refused when asked for by name.
 
 Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder as
@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gimwatch.errors import InputError
-from gimwatch.results import prepare_directory
+from gimwatch.output.atomic import prepare_directory
 
 __all__ = [
     "SECTIONS",
@@ -102,36 +102,36 @@ class Section:
 SECTIONS: dict[str, Section] = {
     s.name: s
     for s in (
-        Section("conditioning", "Conditioning cost vs n", "gimwatch.bench.conditioning"),
+        Section("conditioning", "Conditioning cost vs n", "gimwatch.bench.conditioning_cost"),
         Section("estimators", "Estimator quality vs cost", "gimwatch.bench.estimators"),
         Section("accuracy", "Forward-dynamics accuracy vs κ", "gimwatch.bench.accuracy"),
         Section(
             "dynamics",
             "Dynamics backends per step",
             "gimwatch.bench.dynamics",
-            ("gimwatch.simulate",),
+            ("gimwatch.simulation.simulate",),
         ),
         Section(
             "integrators",
             "Work-precision of integrators (MuJoCo peer)",
             "gimwatch.bench.integrators",
-            ("gimwatch.simulate",),
+            ("gimwatch.simulation.simulate",),
         ),
         Section(
             "watch",
             "Cost of the watch per step",
             "gimwatch.bench.watch_section",
-            ("gimwatch.watch",),
+            ("gimwatch.metrics.watch",),
         ),
         Section(
             "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
         ),
-        Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain"),
+        Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),
         Section(
             "tighten",
             "Tightening the tolerance on alarm",
             "gimwatch.bench.tighten",
-            ("gimwatch.simulate",),
+            ("gimwatch.simulation.simulate",),
         ),
     )
 }

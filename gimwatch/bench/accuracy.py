@@ -5,7 +5,7 @@ links, in three families: ``straight`` (the paper chain at q = 0), ``random`` (t
 chain at a seeded random configuration) and ``tapered`` (mass and length falling
 geometrically from root to tip, 2.2 kg → 0.022 kg and 1 m → 0.1 m). Velocities and torques
 are seeded random draws. q̈ from each method is compared with
-:class:`gimwatch.reference.PlanarChainReference` at 50 digits:
+:class:`gimwatch.stress.reference_planar.PlanarChainReference` at 50 digits:
 
 * ``aba`` — Pinocchio's articulated-body algorithm, O(n);
 * ``crba_pin_cholesky`` — CRBA + Pinocchio's sparse UDUᵀ ``cholesky.decompose/solve``;
@@ -25,10 +25,10 @@ import scipy.linalg
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import EPS, plot_accuracy_vs_kappa
 from gimwatch.bench.report import markdown_table
-from gimwatch.chains import chain_spec
-from gimwatch.conditioning import condition_number
-from gimwatch.reference import PlanarChainReference
-from gimwatch.robots import Robot, random_configurations
+from gimwatch.metrics.conditioning import condition_number
+from gimwatch.model.chains import chain_spec
+from gimwatch.model.robots import Robot, random_configurations
+from gimwatch.stress.reference_planar import PlanarChainReference
 
 __all__ = ["COLUMNS", "FAMILIES", "FULL_SIZES", "QUICK_SIZES", "run"]
 
@@ -48,7 +48,7 @@ def _spec(family: str, n: int):
 
 
 def _robot(spec) -> Robot:
-    from gimwatch.chains import generate_chain_urdf
+    from gimwatch.model.chains import generate_chain_urdf
 
     xml = generate_chain_urdf(spec)
     model = pin.buildModelFromXML(xml)

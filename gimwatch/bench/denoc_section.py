@@ -2,7 +2,7 @@
 
 For each chain size n (the paper's rod chains ``chain:n``, one seeded random state) it times
 the GIM (DeNOC Eqs. 11–13 vs ``pinocchio.crba``), its O(n) diagonal (no Pinocchio
-counterpart: ``gimwatch.inertia.gim_diagonal`` is listed for scale), inverse dynamics (vs
+counterpart: ``gimwatch.model.inertia.gim_diagonal`` is listed for scale), inverse dynamics (vs
 ``rnea``) and forward dynamics (Saha's UDUᵀ recursion vs ``aba``): median time per call
 (:func:`gimwatch.bench.timing.time_call`) and the ratio DeNOC / Pinocchio.
 
@@ -24,8 +24,8 @@ from gimwatch.bench.plots import plot_denoc_cost
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits, time_call
 from gimwatch.crosscheck import denoc_model
-from gimwatch.inertia import gim_diagonal
-from gimwatch.robots import load_robot, random_configurations
+from gimwatch.model.inertia import gim_diagonal
+from gimwatch.model.robots import load_robot, random_configurations
 
 __all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "run"]
 

@@ -1,6 +1,6 @@
 """Section ``dynamics``: what one forward-dynamics evaluation costs, per backend and n.
 
-Every backend of :data:`gimwatch.backends.BACKENDS` (``aba``, ``crba-cholesky``,
+Every backend of :data:`gimwatch.simulation.backends.BACKENDS` (``aba``, ``crba-cholesky``,
 ``denoc``, and any registered later) is built for the paper's chain of n rods under
 gravity (−y) and its ``forward_dynamics(q, v, τ)`` — one right-hand-side evaluation of a
 simulation step; RK4 makes 4 per step, DOP853 12 — is timed at one seeded random state
@@ -19,13 +19,13 @@ import gc
 
 import numpy as np
 
-from gimwatch.backends import BACKENDS
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import plot_dynamics_cost
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits, time_call
 from gimwatch.errors import RobotError
-from gimwatch.robots import DATA_NV_LIMIT, Robot, load_robot, random_configurations
+from gimwatch.model.robots import DATA_NV_LIMIT, Robot, load_robot, random_configurations
+from gimwatch.simulation.backends import BACKENDS
 
 __all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "run"]
 

@@ -32,17 +32,17 @@ from gimwatch.bench.integrators import chain_scene_table
 from gimwatch.bench.plots import plot_pareto
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
-from gimwatch.conditioning import (
+from gimwatch.metrics.conditioning import (
     condition_estimate_1norm,
     condition_number,
     diagonal_ratio,
     pivot_ratio_forward,
 )
-from gimwatch.inertia import gim, gim_diagonal
-from gimwatch.matrix_free import kappa_matrix_free
-from gimwatch.robots import Robot, load_robot, random_configurations
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import run_scene
+from gimwatch.metrics.matrix_free import kappa_matrix_free
+from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.robots import Robot, load_robot, random_configurations
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import run_scene
 
 __all__ = ["COLUMNS", "ESTIMATORS", "SWING_DURATION_S", "run"]
 

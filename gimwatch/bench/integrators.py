@@ -2,7 +2,8 @@
 
 The paper's swinging 10- and 20-link chains (``scenes/chain_10.toml``, ``chain_20.toml``:
 straight and horizontal at rest, gravity −y in the plane of motion, 5 s) are run with every
-integrator of :class:`gimwatch.simulate.Simulation` and the ``aba`` backend, the δ watch on
+integrator of :class:`gimwatch.simulation.simulate.Simulation` and the ``aba`` backend, the δ watch
+on
 (``diagonal_ratio`` at the scene's samples, every 0.01 s), energy evaluated at the samples:
 
 * SciPy's DOP853, RK45, Radau, LSODA at rtol = atol = 1e-3 … 1e-12;
@@ -34,8 +35,8 @@ from gimwatch.bench import BenchContext, SectionResult, Table, mujoco_peer
 from gimwatch.bench.plots import plot_work_precision
 from gimwatch.bench.report import markdown_table
 from gimwatch.errors import InputError
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import Simulation
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import Simulation
 
 __all__ = ["CAP_S", "COLUMNS", "TARGET_ERROR_RAD", "chain_scene_table", "run"]
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gimwatch.results import write_bytes_atomic
+from gimwatch.output.atomic import write_bytes_atomic
 
 __all__ = [
     "plot_accuracy_vs_kappa",

@@ -19,9 +19,9 @@ from pathlib import Path
 from gimwatch._version import __version__
 from gimwatch.bench import SectionResult, Table
 from gimwatch.bench.timing import blas_thread_ratio, thread_settings
-from gimwatch.environment import cpu_model
 from gimwatch.errors import InputError
-from gimwatch.results import write_json_atomic, write_text_atomic
+from gimwatch.output.atomic import write_json_atomic, write_text_atomic
+from gimwatch.output.environment import cpu_model
 
 __all__ = [
     "environment",

@@ -16,8 +16,8 @@ import numpy as np
 
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
-from gimwatch.scene import parse_scene
-from gimwatch.simulate import Simulation
+from gimwatch.simulation.scene import parse_scene
+from gimwatch.simulation.simulate import Simulation
 
 __all__ = ["COLUMNS", "run"]
 

@@ -18,7 +18,7 @@ import numpy as np
 import scipy.linalg
 from threadpoolctl import threadpool_info, threadpool_limits
 
-from gimwatch.robots import DATA_NV_LIMIT, Robot
+from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 
 __all__ = [
     "Timing",

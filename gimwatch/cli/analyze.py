@@ -5,17 +5,17 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.analysis import analyze_configuration
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.errors import InputError
-from gimwatch.results import to_json
-from gimwatch.robots import (
+from gimwatch.metrics.dense_analysis import analyze_configuration
+from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     load_robot,
     neutral_configuration,
     parse_chain_spec,
     random_configurations,
 )
+from gimwatch.output.atomic import to_json
 
 NAME = "analyze"
 #: More configurations than this would print a table nobody reads; use ``survey``.
@@ -71,7 +71,11 @@ def _configurations(args: argparse.Namespace, nq: int, neutral, draw) -> list:
 def _run_linear(args: argparse.Namespace, chain, announce: bool) -> list:
     """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
     from gimwatch.denoc import DenocModel
-    from gimwatch.longchain import LINEAR_METRICS, analyze_linear, chain_configurations
+    from gimwatch.metrics.linear_analysis import (
+        LINEAR_METRICS,
+        analyze_linear,
+        chain_configurations,
+    )
 
     if args.floating:
         raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)

@@ -5,9 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.chains import AXIS_LAYOUTS, JOINT_TYPES, PAPER_CHAIN, chain_spec, generate_chain_urdf
 from gimwatch.cli._format import float_list, positive_int
-from gimwatch.results import write_text_atomic
+from gimwatch.model.chains import (
+    AXIS_LAYOUTS,
+    JOINT_TYPES,
+    PAPER_CHAIN,
+    chain_spec,
+    generate_chain_urdf,
+)
+from gimwatch.output.atomic import write_text_atomic
 
 NAME = "chain"
 HELP = "write the URDF of an n-link chain of homogeneous rods"

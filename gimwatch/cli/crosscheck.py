@@ -13,8 +13,8 @@ import sys
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.crosscheck import DEFAULT_TOLERANCE, CrossCheckResult, crosscheck_robot
 from gimwatch.errors import InputError, RobotError
-from gimwatch.results import to_json
-from gimwatch.robots import example_robot_names, load_robot
+from gimwatch.model.robots import example_robot_names, load_robot
+from gimwatch.output.atomic import to_json
 
 NAME = "crosscheck"
 HELP = "compare DeNOC with Pinocchio (crba, rnea, aba, cholesky) at random states"

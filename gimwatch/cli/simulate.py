@@ -8,9 +8,9 @@ import sys
 from pathlib import Path
 
 from gimwatch.cli._progress import ProgressBar
-from gimwatch.scene import BACKENDS, load_scene
-from gimwatch.simresults import summarize, write_simulation
-from gimwatch.simulate import Simulation
+from gimwatch.simulation.results_folder import summarize, write_simulation
+from gimwatch.simulation.scene import BACKENDS, load_scene
+from gimwatch.simulation.simulate import Simulation
 
 NAME = "simulate"
 HELP = "simulate a scene (TOML) and watch the conditioning of M(q)"

@@ -6,9 +6,9 @@ import argparse
 import sys
 
 from gimwatch.cli._format import non_negative_int, table
-from gimwatch.results import to_json
-from gimwatch.stress import METHODS, run_stress, stress_markdown
-from gimwatch.stress_cases import CASES
+from gimwatch.output.atomic import to_json
+from gimwatch.stress.cases import CASES
+from gimwatch.stress.suite import METHODS, run_stress, stress_markdown
 
 NAME = "stress"
 HELP = "hard cases: is M SPD, DeNOC = CRBA, q̈ within C·kappa·eps of mpmath, simulations finite"

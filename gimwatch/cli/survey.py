@@ -10,9 +10,9 @@ from pathlib import Path
 
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.errors import GimwatchError, OutputError
-from gimwatch.survey import run_survey
-from gimwatch.survey_report import write_survey
-from gimwatch.survey_trajectory import TrajectorySettings
+from gimwatch.survey.report import write_survey
+from gimwatch.survey.run import run_survey
+from gimwatch.survey.trajectory import TrajectorySettings
 
 NAME = "survey"
 HELP = "does the diagonal ratio track kappa? a report over many robots and configurations"

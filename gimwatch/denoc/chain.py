@@ -1,16 +1,16 @@
 """The :class:`~gimwatch.denoc.tree.BodyTree` of a generated rod chain, without URDF text.
 
 Reading a 10^5-link URDF through an XML parser costs more than every recursion on it; the
-chain's bodies follow directly from its :class:`~gimwatch.chains.ChainSpec`, with the same
-geometry as :func:`gimwatch.chains.generate_chain_urdf` (tests compare the two).
+chain's bodies follow directly from its :class:`~gimwatch.model.chains.ChainSpec`, with the same
+geometry as :func:`gimwatch.model.chains.generate_chain_urdf` (tests compare the two).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gimwatch.chains import ChainSpec
 from gimwatch.denoc.tree import JOINT_KINDS, BodyTree
+from gimwatch.model.chains import ChainSpec
 
 __all__ = ["chain_body_tree"]
 

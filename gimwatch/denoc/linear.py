@@ -33,7 +33,7 @@ class LinearTimeModel:
     """O(n) dynamics of a fixed-base tree of 1-DoF joints.
 
     Example:
-        >>> from gimwatch.chains import chain_spec
+        >>> from gimwatch.model.chains import chain_spec
         >>> from gimwatch.denoc import LinearTimeModel, chain_body_tree
         >>> model = LinearTimeModel(chain_body_tree(chain_spec(4)))
         >>> round(float(model.at([0.0] * 4).diagonal()[0]), 4)

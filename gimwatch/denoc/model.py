@@ -14,12 +14,12 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.chains import ChainSpec
 from gimwatch.denoc import recursions
 from gimwatch.denoc.chain import chain_body_tree
 from gimwatch.denoc.linear import ConfigurationState, LinearTimeModel
 from gimwatch.denoc.tree import FREE_FLYER_NAME, BodyTree, read_body_tree
 from gimwatch.errors import ConditioningError, InputError
+from gimwatch.model.chains import ChainSpec
 
 __all__ = ["DenocModel"]
 

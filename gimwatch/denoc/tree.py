@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gimwatch.errors import URDFError
-from gimwatch.urdf import check_urdf
+from gimwatch.model.urdf_text import check_urdf
 
 __all__ = ["FREE_FLYER_NAME", "JOINT_KINDS", "BodyTree", "read_body_tree"]
 

@@ -6,8 +6,8 @@ g = (0, 0, -9.81) m/s² (URDF's z up; (0, -9.81, 0) for generated chains, which 
 the xy plane) for ``duration_s`` with light diagonal joint damping
 c_i = ``damping_per_s`` · M_ii(q0) (each joint alone would lose its velocity at that rate,
 whatever its inertia; a constant c would make light distal joints stiff). Joint limits are
-not enforced. Each run is an ordinary scene (:func:`gimwatch.scene.parse_scene`) run by
-:mod:`gimwatch.simulate`: DOP853 at a modest tolerance, or fixed-step RK4 when q has
+not enforced. Each run is an ordinary scene (:func:`gimwatch.simulation.scene.parse_scene`) run by
+:mod:`gimwatch.simulation.simulate`: DOP853 at a modest tolerance, or fixed-step RK4 when q has
 unit-complex coordinates (continuous joints), which SciPy's integrators cannot integrate
 as a vector. The watch samples κ, δ and αδ with α = κ(t0)/δ(t0) calibrated at the first
 sample of each run (Shah & Saha 2013, Eq. 15, the paper's setting).
@@ -31,10 +31,10 @@ import numpy as np
 import scipy.stats
 
 from gimwatch.errors import InputError
-from gimwatch.inertia import gim_diagonal
-from gimwatch.robots import Robot
-from gimwatch.scene import Scene, parse_scene
-from gimwatch.simulate import Simulation
+from gimwatch.model.inertia import gim_diagonal
+from gimwatch.model.robots import Robot
+from gimwatch.simulation.scene import Scene, parse_scene
+from gimwatch.simulation.simulate import Simulation
 
 __all__ = [
     "CHAIN_GRAVITY",
@@ -149,7 +149,8 @@ class SurveyRun:
 
     Attributes:
         start_sample: The random sample it started from.
-        status: :data:`gimwatch.simulate.STATUSES`; only completed runs enter the statistics.
+        status: :data:`gimwatch.simulation.simulate.STATUSES`; only completed runs enter the
+        statistics.
         message: Why it stopped early ("" when completed).
         method: Integrator used.
         steps: Integrator steps taken.

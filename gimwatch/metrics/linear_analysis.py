@@ -1,7 +1,7 @@
 """Conditioning of long chains by the O(n) DeNOC path: no Pinocchio Data, no dense M.
 
 Pinocchio's Data for an n-joint model needs memory growing as n³ (about 1.8 GB at n = 300,
-8 GB at 500), and the dense GIM n². Above :data:`~gimwatch.robots.DATA_NV_LIMIT` joints
+8 GB at 500), and the dense GIM n². Above :data:`~gimwatch.model.robots.DATA_NV_LIMIT` joints
 (or on request) gimwatch analyses fixed-base chains and trees with the compiled DeNOC
 recursions instead: diag M and δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each);
 the backward (UDUᵀ) pivots from the articulated-body factor. The forward (LDLᵀ) pivots and
@@ -15,10 +15,10 @@ from collections.abc import Collection
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.analysis import GimAnalysis, check_massless
-from gimwatch.chains import ChainSpec
 from gimwatch.denoc import DenocModel, matrix_free_kappa
 from gimwatch.errors import InputError
+from gimwatch.metrics.dense_analysis import GimAnalysis, check_massless
+from gimwatch.model.chains import ChainSpec
 
 __all__ = ["LINEAR_METRICS", "analyze_linear", "chain_configurations"]
 
@@ -29,7 +29,7 @@ LINEAR_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_backward")
 def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np.ndarray:
     """Random configurations of a generated chain, shape ``(count, n)``, within its limits.
 
-    Draws exactly what :func:`gimwatch.robots.random_configurations` draws for the same
+    Draws exactly what :func:`gimwatch.model.robots.random_configurations` draws for the same
     chain and seed (one uniform number per joint and configuration, joint by joint), without
     building a Pinocchio model.
     """

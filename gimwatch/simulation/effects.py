@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import SceneError
-from gimwatch.robots import Robot
+from gimwatch.model.robots import Robot
 
 __all__ = ["EFFECTS", "Effect", "build_effects", "joint_vector"]
 

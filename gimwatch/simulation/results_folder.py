@@ -25,16 +25,16 @@ from typing import Any
 
 import numpy as np
 
-from gimwatch.environment import versions
 from gimwatch.errors import OutputError
-from gimwatch.results import (
+from gimwatch.metrics.watch import estimator_quality
+from gimwatch.output.atomic import (
     prepare_directory,
     write_json_atomic,
     write_npz_atomic,
     write_text_atomic,
 )
-from gimwatch.simulate import Trajectory
-from gimwatch.watch import estimator_quality
+from gimwatch.output.environment import versions
+from gimwatch.simulation.simulate import Trajectory
 
 __all__ = ["summarize", "versions", "write_simulation"]
 
@@ -94,7 +94,7 @@ def _plots(trajectory: Trajectory, folder: Path) -> None:
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from gimwatch import plots
+    from gimwatch.output import figures as plots
 
     def save(name, draw):
         fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")

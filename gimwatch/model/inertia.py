@@ -14,7 +14,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from gimwatch.robots import Robot, as_configuration
+from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = ["gim", "gim_diagonal"]
 

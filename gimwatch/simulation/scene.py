@@ -52,7 +52,7 @@ METRIC_NAMES = (
     "eigenvalues",
     "diagonal",
 )
-#: What to do when the alarm metric crosses its threshold (see gimwatch.simulate).
+#: What to do when the alarm metric crosses its threshold (see gimwatch.simulation.simulate).
 ON_ALARM_ACTIONS = ("warn", "stop", "tighten", "switch-backend")
 TORQUE_LAWS = ("constant", "sinusoid", "pd")
 

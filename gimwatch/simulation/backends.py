@@ -11,7 +11,7 @@ or zero when the scene declares no gravity: the recursions then add nothing for 
 
 A backend is also where the watch and the energy get M(q), diag M(q) and the energy from,
 so that a long chain on ``denoc`` never builds a Pinocchio Data (its memory grows as nv³):
-above :data:`~gimwatch.robots.DATA_NV_LIMIT` coordinates, :func:`make_backend` switches to
+above :data:`~gimwatch.model.robots.DATA_NV_LIMIT` coordinates, :func:`make_backend` switches to
 ``denoc`` and says so with a :class:`~gimwatch.errors.BackendWarning`.
 """
 
@@ -25,8 +25,8 @@ import pinocchio as pin
 import scipy.linalg
 
 from gimwatch.errors import BackendWarning
-from gimwatch.inertia import gim, gim_diagonal
-from gimwatch.robots import DATA_NV_LIMIT, Robot
+from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 
 __all__ = ["BACKENDS", "Backend", "make_backend", "model_with_gravity"]
 

@@ -8,16 +8,16 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.conditioning import (
+from gimwatch.errors import ConditioningError
+from gimwatch.metrics.conditioning import (
     check_gim,
     diagonal_ratio,
     eigenvalues,
     ldlt_pivots,
     udut_pivots,
 )
-from gimwatch.errors import ConditioningError
-from gimwatch.inertia import gim
-from gimwatch.robots import Robot, as_configuration
+from gimwatch.model.inertia import gim
+from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = ["GimAnalysis", "analyze_configuration", "check_massless", "check_robot_gim"]
 
@@ -29,7 +29,8 @@ class GimAnalysis:
     Attributes:
         robot: Robot name.
         method: ``"crba"`` (dense M from Pinocchio, symmetric eigensolver) or
-            ``"denoc-linear"`` (the O(n) path of :mod:`gimwatch.longchain`: κ by Lanczos,
+            ``"denoc-linear"`` (the O(n) path of :mod:`gimwatch.metrics.linear_analysis`: κ by
+            Lanczos,
             ``eigenvalues`` only (λmin, λmax), no forward pivots).
         nv: Size of the GIM.
         q: The configuration (length nq).
@@ -87,7 +88,7 @@ def check_massless(
 
 
 def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
-    """Check M(q) of ``robot`` like :func:`~gimwatch.conditioning.check_gim`, naming joints.
+    """Check M(q) of ``robot`` like :func:`~gimwatch.metrics.conditioning.check_gim`, naming joints.
 
     Raises:
         ConditioningError: A coordinate moves no mass (M singular), naming the URDF and the

@@ -1,4 +1,4 @@
-"""The stress suite: on each hard case (:mod:`gimwatch.stress_cases`), do the numbers stay right?
+"""The stress suite: on each hard case (:mod:`gimwatch.stress.cases`), do the numbers stay right?
 
 Per case, at its configuration q with seeded random v ~ U(−1, 1) and τ ~ U(−10, 10):
 
@@ -19,8 +19,9 @@ bias in float64 adds another such term. 10·√nv bounds every case measured wit
 (the table reports error/(κ·eps) so the margin can be read off).
 
 References: planar revolute chains use the closed-form Lagrangian of
-:mod:`gimwatch.reference` (independent of Pinocchio and DeNOC, even of the URDF); every
-other case uses :class:`gimwatch.reference_tree.TreeReference`, Featherstone's ABA in
+:mod:`gimwatch.stress.reference_planar` (independent of Pinocchio and DeNOC, even of the URDF);
+every
+other case uses :class:`gimwatch.stress.reference_tree.TreeReference`, Featherstone's ABA in
 mpmath on the body tree read by DeNOC's URDF reader (independent of both codes' recursions
 and arithmetic, not of that reader).
 """
@@ -34,11 +35,11 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.linalg
 
-from gimwatch import conditioning
 from gimwatch.crosscheck import denoc_model
 from gimwatch.errors import InputError
-from gimwatch.robots import DATA_NV_LIMIT, Robot
-from gimwatch.stress_cases import CASES, StressCase
+from gimwatch.metrics import conditioning
+from gimwatch.model.robots import DATA_NV_LIMIT, Robot
+from gimwatch.stress.cases import CASES, StressCase
 
 __all__ = [
     "ENERGY_DRIFT_LIMIT",
@@ -112,7 +113,7 @@ class StressResult:
 
 def _planar(case: StressCase):
     """The planar closed-form reference of a planar revolute chain case, else None."""
-    from gimwatch.reference import PlanarChainReference
+    from gimwatch.stress.reference_planar import PlanarChainReference
 
     spec = case.spec
     if spec is None or any(a != "z" for a in spec.axes):
@@ -128,7 +129,7 @@ def _reference(case: StressCase, robot: Robot):
     if planar is not None and robot.nv <= PLANAR_REFERENCE_MAX_NV:
         return "planar closed form (mpmath)", planar.forward_dynamics
     from gimwatch.denoc.tree import read_body_tree
-    from gimwatch.reference_tree import TreeReference
+    from gimwatch.stress.reference_tree import TreeReference
 
     model = robot.model
     q_index = {model.names[j]: model.joints[j].idx_q for j in range(1, model.njoints)}
@@ -139,7 +140,7 @@ def _reference(case: StressCase, robot: Robot):
 
 
 def _pinocchio_methods(robot: Robot, gravity) -> tuple[dict[str, Callable], Callable]:
-    from gimwatch.backends import make_backend
+    from gimwatch.simulation.backends import make_backend
 
     aba = make_backend("aba", robot, np.asarray(gravity))
     crba = make_backend("crba-cholesky", robot, np.asarray(gravity))
@@ -260,8 +261,8 @@ def run_case(case: StressCase, *, seed: int = 0, simulate: bool = False) -> Stre
 
 def simulate_case(case: StressCase, robot: Robot, q: np.ndarray) -> tuple[str, float | None]:
     """5 s under gravity from rest at q: (status, relative energy drift)."""
-    from gimwatch.scene import parse_scene
-    from gimwatch.simulate import Simulation
+    from gimwatch.simulation.scene import parse_scene
+    from gimwatch.simulation.simulate import Simulation
 
     table: dict = {
         "robot": "placeholder",

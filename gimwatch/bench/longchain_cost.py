@@ -28,9 +28,9 @@ import scipy.linalg
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
-from gimwatch.chains import chain_spec
 from gimwatch.denoc import DenocModel, matrix_free_kappa
-from gimwatch.robots import DATA_NV_LIMIT, load_robot
+from gimwatch.model.chains import chain_spec
+from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
 
 __all__ = ["run"]
 

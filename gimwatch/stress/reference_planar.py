@@ -28,8 +28,8 @@ import mpmath
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.chains import ChainSpec
 from gimwatch.errors import InputError
+from gimwatch.model.chains import ChainSpec
 
 __all__ = ["PlanarChainReference", "planar_reference"]
 

@@ -4,9 +4,9 @@ Metrics come from :data:`METRICS`, keyed by the scene's names; a metric nobody w
 never built, so its cost is never paid. Per sample, the expensive quantities are computed
 at most once and only when a watched metric needs them:
 
-* ``diag M`` — from :func:`gimwatch.inertia.gim_diagonal` (O(n), no M formed) when no
+* ``diag M`` — from :func:`gimwatch.model.inertia.gim_diagonal` (O(n), no M formed) when no
   watched metric needs the full matrix, else read off M;
-* ``M`` — from Pinocchio's CRBA (:func:`gimwatch.inertia.gim`), O(n²);
+* ``M`` — from Pinocchio's CRBA (:func:`gimwatch.model.inertia.gim`), O(n²);
 * the spectrum — a symmetric eigen-solve, O(n³), only for ``kappa`` / ``eigenvalues``
   (and once, at t0, to calibrate α of ``scaled_diagonal_ratio``, Shah & Saha 2013 Eq. 15).
 """
@@ -19,10 +19,10 @@ from typing import ClassVar
 
 import numpy as np
 
-from gimwatch import conditioning
-from gimwatch.inertia import gim, gim_diagonal
-from gimwatch.matrix_free import kappa_matrix_free
-from gimwatch.robots import Robot
+from gimwatch.metrics import conditioning
+from gimwatch.metrics.matrix_free import kappa_matrix_free
+from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.robots import Robot
 
 __all__ = ["METRICS", "Alarm", "EstimatorQuality", "Watch", "estimator_quality"]
 
@@ -93,7 +93,7 @@ class Kappa(Metric):
 class KappaLanczos(Metric):
     """κ₂ = λmax / λmin (Eq. 6) by low-accuracy Lanczos on the RNEA and ABA operators.
 
-    No M is formed (:func:`gimwatch.matrix_free.kappa_matrix_free`, ARPACK tolerance
+    No M is formed (:func:`gimwatch.metrics.matrix_free.kappa_matrix_free`, ARPACK tolerance
     :attr:`TOL`); each sample starts from the previous sample's extreme eigenvectors, so
     along a smooth trajectory a few O(n) products per sample suffice.
     """

@@ -1,6 +1,7 @@
 """High-precision (mpmath) forward and inverse dynamics of any kinematic tree, without Pinocchio.
 
-The planar closed form of :mod:`gimwatch.reference` covers planar revolute chains only; this
+The planar closed form of :mod:`gimwatch.stress.reference_planar` covers planar revolute chains
+only; this
 module covers every tree DeNOC reads (revolute, continuous and prismatic joints, fixed or
 free-flyer base). It runs Featherstone's articulated-body algorithm (ABA, *Rigid Body
 Dynamics Algorithms* 2008, Table 7.1) and recursive Newton–Euler algorithm (RNEA, Table 5.1)
@@ -13,7 +14,7 @@ Everything after that — kinematics, spatial algebra, the recursions, the arith
 written here, independently of Pinocchio and of DeNOC's recursions (which use world-frame
 composite inertias and a UDUᵀ elimination, not body-frame articulated inertias). Inputs are
 taken as exact binary floats. ``rnea(q, v, aba(q, v, τ)) = τ`` to ~10^−(dps−5) checks it
-against itself, and the planar closed form against :mod:`gimwatch.reference`.
+against itself, and the planar closed form against :mod:`gimwatch.stress.reference_planar`.
 """
 
 from __future__ import annotations

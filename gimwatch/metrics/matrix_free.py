@@ -25,7 +25,7 @@ import pinocchio as pin
 from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
 from gimwatch.errors import ConditioningError, InputError
-from gimwatch.robots import Robot, as_configuration
+from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = [
     "MatrixFreeKappa",

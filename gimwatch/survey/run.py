@@ -2,7 +2,7 @@
 
 For each robot, sample 0 is the neutral configuration (Pinocchio's ``neutral``: zero angles,
 identity quaternions) and samples 1..K are drawn uniformly within the joint limits with
-:func:`~gimwatch.robots.random_configurations` (seeded, all drawn up front, then cut into
+:func:`~gimwatch.model.robots.random_configurations` (seeded, all drawn up front, then cut into
 chunks), so the result does not depend on how the chunks are scheduled. At every sample the
 GIM M(q) comes from Pinocchio's CRBA and gives:
 
@@ -15,7 +15,7 @@ Per robot the survey reports quantiles of κ, δ and the pivot ratios; the Pears
 Spearman correlations of log δ with log κ; the relative error |αδ - κ|/κ of the scaled
 diagonal ratio (Eq. 15) with α = κ/δ calibrated once at the neutral sample (the paper's
 t0), over samples 1..K; the worst configurations; and the coordinates that most often
-carry the extremes. Nothing here prints; :mod:`gimwatch.survey_report` writes the files.
+carry the extremes. Nothing here prints; :mod:`gimwatch.survey.report` writes the files.
 """
 
 from __future__ import annotations
@@ -30,13 +30,14 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg
 
-from gimwatch.analysis import check_robot_gim
-from gimwatch.conditioning import ldlt_pivots, udut_pivots
 from gimwatch.errors import ConditioningError, GimwatchError, InputError, RobotError
-from gimwatch.inertia import gim
-from gimwatch.robots import Robot, example_robot_names, load_robot, neutral_configuration
-from gimwatch.robots import random_configurations as _random_configurations
-from gimwatch.survey_trajectory import (
+from gimwatch.metrics.conditioning import ldlt_pivots, udut_pivots
+from gimwatch.metrics.dense_analysis import check_robot_gim
+from gimwatch.model.inertia import gim
+from gimwatch.model.robots import Robot, example_robot_names, load_robot, neutral_configuration
+from gimwatch.model.robots import random_configurations as _random_configurations
+from gimwatch.survey.sweep import Task, run_sweep
+from gimwatch.survey.trajectory import (
     TrajectorySettings,
     TrajectoryStatistics,
     correlations,
@@ -44,7 +45,6 @@ from gimwatch.survey_trajectory import (
     skip_reason,
     summarize_runs,
 )
-from gimwatch.sweep import Task, run_sweep
 
 __all__ = [
     "QUANTILES",
@@ -305,7 +305,7 @@ def run_survey(
     Args:
         specs: Robot specifications; ``all`` means every example-robot-data robot.
         samples: K, random configurations per robot (>= 1), besides the neutral one.
-        seed: Seed of :func:`~gimwatch.robots.random_configurations` (same for every robot).
+        seed: Seed of :func:`~gimwatch.model.robots.random_configurations` (same for every robot).
         floating: Give every robot a free-flyer base. Without it, robots with no joint
             (drones) get one anyway and say so in ``note``.
         chunk_size: Samples per task.
@@ -313,7 +313,7 @@ def run_survey(
         scheduler: ``"local"`` or a Dask scheduler address to run the chunks on Dask.
         progress: Called as ``progress(finished_chunks, total_chunks)`` after each chunk.
         trajectories: Also simulate short runs from random samples 1..count of each robot
-            (:mod:`gimwatch.survey_trajectory`); each run is one more task of the sweep.
+            (:mod:`gimwatch.survey.trajectory`); each run is one more task of the sweep.
     """
     for name, value in (("samples", samples), ("chunk_size", chunk_size)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:

@@ -2,7 +2,7 @@
 
 Long, tapered, lopsided and mixed chains, robots at singular poses, floating humanoids.
 
-Chains come from the generator (:func:`gimwatch.chains.chain_spec`); robots from
+Chains come from the generator (:func:`gimwatch.model.chains.chain_spec`); robots from
 example-robot-data. A case is built lazily (:meth:`StressCase.build`), so listing the cases
 costs nothing and a 500-link chain is only generated when it is run.
 """
@@ -14,8 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gimwatch.chains import ChainSpec, chain_spec
-from gimwatch.robots import Robot, chain_robot, load_robot, neutral_configuration
+from gimwatch.model.chains import ChainSpec, chain_spec
+from gimwatch.model.robots import Robot, chain_robot, load_robot, neutral_configuration
 
 __all__ = ["CASES", "CHAIN_GRAVITY_M_S2", "ROBOT_GRAVITY_M_S2", "StressCase"]
 

@@ -1,4 +1,4 @@
-"""Write a :class:`~gimwatch.survey.SurveyResult`: report.md, survey.json, survey.csv, PNG plots.
+"""Write a survey result (:class:`~gimwatch.survey.run.SurveyResult`): report, JSON, CSV, plots.
 
 Every file is written atomically (temporary name, then rename), so an interrupted or failed
 run never leaves half a file; an interrupted survey is written too, and says so.
@@ -14,10 +14,10 @@ from pathlib import Path
 
 import numpy as np
 
-from gimwatch.environment import cpu_model, versions
-from gimwatch.results import write_bytes_atomic, write_json_atomic, write_text_atomic
-from gimwatch.survey import DOF_METRICS, METRICS, RobotSurvey, SurveyResult
-from gimwatch.survey_trajectory import TrajectoryStatistics
+from gimwatch.output.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
+from gimwatch.output.environment import cpu_model, versions
+from gimwatch.survey.run import DOF_METRICS, METRICS, RobotSurvey, SurveyResult
+from gimwatch.survey.trajectory import TrajectoryStatistics
 
 __all__ = [
     "plot_kappa_vs_delta",

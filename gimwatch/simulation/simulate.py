@@ -34,11 +34,10 @@ import numpy as np
 import pinocchio as pin
 import scipy.integrate
 
-from gimwatch.backends import make_backend
-from gimwatch.chains import chain_spec
-from gimwatch.effects import build_effects, joint_vector
 from gimwatch.errors import GimwatchError, SceneError, SimulationError
-from gimwatch.robots import (
+from gimwatch.metrics.watch import Alarm, Watch
+from gimwatch.model.chains import chain_spec
+from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     Robot,
     _too_large,
@@ -46,8 +45,9 @@ from gimwatch.robots import (
     load_robot,
     neutral_configuration,
 )
-from gimwatch.scene import Scene
-from gimwatch.watch import Alarm, Watch
+from gimwatch.simulation.backends import make_backend
+from gimwatch.simulation.effects import build_effects, joint_vector
+from gimwatch.simulation.scene import Scene
 
 __all__ = [
     "MIN_STEP_FRACTION",

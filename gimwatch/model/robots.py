@@ -27,8 +27,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from gimwatch.chains import ChainSpec, chain_spec, generate_chain_urdf
 from gimwatch.errors import InputError, RobotError, URDFError
+from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
 
 __all__ = [
     "Robot",
@@ -174,7 +174,7 @@ def _captured_stderr_fd() -> Iterator[list[str]]:
 
 
 def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
-    from gimwatch.urdf import check_urdf
+    from gimwatch.model.urdf_text import check_urdf
 
     root = check_urdf(xml, source)
     depth = _tree_depth(root)

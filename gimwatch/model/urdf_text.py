@@ -11,7 +11,7 @@ import warnings
 import xml.etree.ElementTree as ET
 
 from gimwatch.errors import URDFError, URDFWarning
-from gimwatch.urdf_physics import check_joint_values, check_link_values
+from gimwatch.model.urdf_values import check_joint_values, check_link_values
 
 __all__ = ["check_urdf", "parse_urdf_xml"]
 
@@ -40,7 +40,7 @@ def parse_urdf_xml(xml: str, source: str) -> ET.Element:
 def check_urdf(xml: str, source: str) -> ET.Element:
     """Check the structure of URDF text and return its ``<robot>`` element.
 
-    Then every value urdfdom reads is checked (see :mod:`gimwatch.urdf_physics`).
+    Then every value urdfdom reads is checked (see :mod:`gimwatch.model.urdf_values`).
 
     Raises:
         URDFError: The text is not well-formed XML, not a URDF, its links and joints do

@@ -1,0 +1,1 @@
+"""Conditioning metrics of the GIM: κ, δ, pivots, matrix-free κ; one-shot analyses; the watch."""

@@ -1,0 +1,1 @@
+"""Output: atomic writes, report headers (environment), figures."""

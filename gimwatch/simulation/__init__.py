@@ -1,0 +1,1 @@
+"""Scenes, effects, dynamics backends and integrators, and the results folder of a run."""

@@ -1,0 +1,1 @@
+"""The stress suite: hard cases checked against high-precision (mpmath) references."""

@@ -1,0 +1,1 @@
+"""Surveys across robots: random configurations and short trajectories, run in chunks, reported."""
