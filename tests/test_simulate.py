@@ -84,14 +84,20 @@ def _reference_4_link(duration):
     )
 
 
+#: Observed orders published in docs/guide/simulate.md (4-link chain, 0.5 s, against DOP853
+#: at 1e-13), checked here with ORDER_MARGIN.
+PUBLISHED_ORDERS = {"RK4": (3.94, 3.97), "semi-implicit-euler": (1.00, 1.00)}
+ORDER_MARGIN = 0.02
+
+
 @pytest.mark.parametrize(
-    ("method", "order", "dts"),
+    ("method", "dts"),
     [
-        ("RK4", 4, (0.01, 0.005, 0.0025)),
-        ("semi-implicit-euler", 1, (0.001, 0.0005, 0.00025)),
+        ("RK4", (0.01, 0.005, 0.0025)),
+        ("semi-implicit-euler", (0.001, 0.0005, 0.00025)),
     ],
 )
-def test_fixed_step_integrators_converge_at_their_order(method, order, dts):
+def test_fixed_step_integrators_converge_at_their_order(method, dts):
     duration = 0.5
     reference = _reference_4_link(duration)
     errors = []
@@ -108,8 +114,9 @@ def test_fixed_step_integrators_converge_at_their_order(method, order, dts):
         x_ref = np.concatenate((reference.q[-1], reference.v[-1]))
         errors.append(np.abs(x - x_ref).max())
     observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
-    # published (README): RK4 3.94–3.97, semi-implicit Euler 1.00; margin ±0.1
-    assert np.all(np.abs(observed - order) < 0.1), (errors, observed)
+    low, high = PUBLISHED_ORDERS[method]
+    assert np.all(observed >= low - ORDER_MARGIN), (errors, observed)
+    assert np.all(observed <= high + ORDER_MARGIN), (errors, observed)
 
 
 @pytest.mark.parametrize("method", ["RK45", "DOP853", "Radau", "LSODA"])
