@@ -240,6 +240,14 @@ MUTANTS = (
         LONG,
         "DeNOC kinetic energy off by 1e-9 relative",
     ),
+    Mutant(
+        "rk4-third-stage",
+        "gimwatch/simulation/simulate.py",
+        "q3, v3 = self._integrate_q(q, 0.5 * dt * v2), v + 0.5 * dt * a2",
+        "q3, v3 = self._integrate_q(q, 0.5 * dt * v2), v + 0.5 * dt * a1",
+        ("tests/test_simulate.py", "-k", "converge"),
+        "RK4's third stage from the first slope (order drops)",
+    ),
     # --- Lanczos ---
     Mutant(
         "lanczos-stops-at-1e-3",

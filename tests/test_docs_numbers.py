@@ -218,3 +218,40 @@ def test_dependency_lower_bounds_are_the_pinned_tested_versions():
         assert match, f"{requirement}: expected name>=version"
         name = match.group(1).lower().replace("_", "-")
         assert pins.get(name) == match.group(3), (requirement, pins.get(name))
+
+
+def test_survey_headlines_are_the_committed_survey():
+    survey = json.loads((BENCH / "survey" / "survey.json").read_text())
+    robots = survey["robots"]
+    pearson = [r["pearson_log_delta_log_kappa"] for r in robots]
+    pearson = [x for x in pearson if x is not None and np.isfinite(x)]
+    below = sum(x < 0.5 for x in pearson)
+    readme = _find("README.md", r"\((\d+) of (\d+) below 0\.5\)")
+    assert [int(x) for x in readme.groups()] == [below, len(pearson)]
+    assert int(_find("README.md", r"on the paper's chains and on (\d+) real robots").group(1)) == (
+        len(robots)
+    )
+    claims = "docs/findings/claims.md"
+    match = _find(
+        claims,
+        r"Across random configurations of (\d+) real robots the median Pearson\s+correlation is "
+        r"([\d.]+) \((\d+) above 0\.9\), but (\d+) branched robots",
+    )
+    assert _numbers(match) == [
+        len(pearson),
+        round(float(np.median(pearson)), 2),
+        sum(x > 0.9 for x in pearson),
+        below,
+    ]
+    errors = [r["alpha_delta_rel_error_median"] for r in robots]
+    errors = [x for x in errors if x is not None and np.isfinite(x)]
+    match = _find(
+        claims,
+        r"median error\s+is ([\d.]+) \(median over robots\), but (\d+) of (\d+) robots have median "
+        r"errors above 100 %",
+    )
+    assert _numbers(match) == [
+        round(float(np.median(errors)), 2),
+        sum(x > 1 for x in errors),
+        len(robots),
+    ]
