@@ -147,7 +147,7 @@ MUTANTS = (
         "gimwatch/stress/reference_tree.py",
         "REFERENCE_DIGITS = 50",
         "REFERENCE_DIGITS = 15",
-        ("tests/test_stress.py", "tests/test_reference_precision.py", "-m", "not slow"),
+        ("tests/test_reference_precision.py", "tests/test_stress.py", "-m", "not slow"),
         "the tree reference at 15 digits (its default precision is the stress suite's)",
     ),
     Mutant(

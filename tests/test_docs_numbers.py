@@ -255,3 +255,21 @@ def test_survey_headlines_are_the_committed_survey():
         sum(x > 1 for x in errors),
         len(robots),
     ]
+
+
+def test_cost_and_long_chain_tables_are_the_committed_runs():
+    summary = json.loads((BENCH / "summary.json").read_text())
+    speedup = summary["sections"]["conditioning"]["speedup_delta_on_vs_kappa_eig"]
+    match = _find(
+        "docs/findings/claims.md",
+        r"The O\(n\) diagonal costs (\d+)× less than κ at n = 200 and (\d+)× less at n = 500",
+    )
+    assert _numbers(match) == [round(speedup["200"]), round(speedup["500"])]
+    page = _text("docs/findings/long-chains.md")
+    for row in _csv("longchain_analyze.csv"):
+        n = int(row["n"])
+        pattern = (
+            rf"\| {n:,} \| [^|]+ \| {float(row['wall_s']):.1f} \| "
+            rf"{round(float(row['peak_rss_mb']))} \|"
+        )
+        assert re.search(pattern, page), f"long-chains.md: no row {pattern!r}"
