@@ -4,12 +4,12 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup demo test lint bench clean
+.PHONY: setup demo test lint bench docs clean mutation
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test,notebooks]'
+	$(PY) -m pip install --quiet -e '.[test,notebooks,docs,pandas]'
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -21,21 +21,33 @@ test: setup
 	$(PY) -W error -c "import gimwatch"
 	$(VENV)/bin/ruff check gimwatch tests
 	$(PY) -m pytest -n 2 --nbmake tests $(wildcard notebooks/*.ipynb)
+	$(MAKE) docs
 
-# Regenerates benchmarks/survey/ and the README table "Does the diagonal ratio track κ on real robots?"
+# The documentation site (docs/ -> site/), warnings as errors. Its python code blocks are
+# run by tests/test_docs.py.
+docs: setup
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+
+# Regenerates benchmarks/survey/ and the table of docs/findings/survey.md
 .PHONY: survey
 survey: setup
 	$(VENV)/bin/gimwatch survey all --samples 200 --seed 0 --trajectory -o benchmarks/survey
 	$(PY) benchmarks/survey/update_readme.py
 
-# Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the README's
-# "What accuracy costs" section.
+# Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the measured block of
+# docs/findings/accuracy-costs.md.
 bench: setup
-	$(VENV)/bin/gimwatch bench all -o benchmarks --readme README.md
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[test,notebooks,docs,pandas]'
+	$(VENV)/bin/gimwatch bench all -o benchmarks --page docs/findings/accuracy-costs.md
+
+# Planted bugs the tests must catch (tests/mutations.py): each applied in a temporary copy of
+# the tree, its test subset run; prints caught/missed/stale per mutant. On demand, not in test.
+mutation: setup
+	$(PY) tests/mutations.py --jobs 2
 
 lint: setup
 	$(VENV)/bin/ruff check gimwatch tests
 	$(VENV)/bin/ruff format --check gimwatch tests
 
 clean:
-	rm -rf $(VENV) demo-output .pytest_cache
+	rm -rf $(VENV) demo-output site .pytest_cache

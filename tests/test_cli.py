@@ -27,8 +27,16 @@ def test_chain_command_writes_the_committed_file(capsys, tmp_path):
 
 def test_analyze_json_for_the_paper_chain(capsys):
     code, out, _ = run(capsys, "analyze", "chain:4", "--json")
-    record = json.loads(out)
+    document = json.loads(out)
     assert code == 0
+    assert {k: document[k] for k in ("robot", "nv", "base", "method")} == {
+        "robot": "chain_4",
+        "nv": 4,
+        "base": "fixed",
+        "method": "crba",
+    }
+    assert len(document["configurations"]) == 1  # a list even for one configuration
+    record = document["configurations"][0]
     assert {
         "robot",
         "nv",
@@ -47,11 +55,31 @@ def test_analyze_json_for_the_paper_chain(capsys):
 
 def test_analyze_random_gives_a_list_and_q_is_used(capsys):
     code, out, _ = run(capsys, "analyze", "ur5", "--random", "3", "--seed", "1", "--json")
-    records = json.loads(out)
-    assert code == 0 and len(records) == 3
+    records = json.loads(out)["configurations"]
+    assert code == 0 and len(records) == 3 and [r["config"] for r in records] == [0, 1, 2]
     q = records[1]["q"]
     code, out, _ = run(capsys, "analyze", "ur5", "--json", "--q", *map(str, q))
-    assert json.loads(out)["kappa"] == pytest.approx(records[1]["kappa"], rel=1e-12)
+    (record,) = json.loads(out)["configurations"]
+    assert record["kappa"] == pytest.approx(records[1]["kappa"], rel=1e-12)
+
+
+def test_analyze_csv_has_the_json_numbers(capsys):
+    import csv
+    import io
+
+    from gimwatch.cli.analyze import CSV_COLUMNS
+
+    _, out, _ = run(capsys, "analyze", "ur5", "--random", "2", "--seed", "1", "--json")
+    records = json.loads(out)["configurations"]
+    code, out, _ = run(capsys, "analyze", "ur5", "--random", "2", "--seed", "1", "--csv")
+    rows = list(csv.DictReader(io.StringIO(out)))
+    assert code == 0 and tuple(rows[0]) == CSV_COLUMNS and len(rows) == 2
+    for row, record in zip(rows, records, strict=True):
+        assert float(row["kappa"]) == record["kappa"]  # repr round-trips exactly
+        assert [float(x) for x in row["q"].split(";")] == record["q"]
+        assert row["min_diagonal_dof"] == record["min_diagonal_dof"]
+    code, _, err = run(capsys, "analyze", "ur5", "--json", "--csv")
+    assert code == 2 and "not allowed with argument" in err
 
 
 @pytest.mark.parametrize("floating", [False, True], ids=["fixed", "floating"])
@@ -66,7 +94,7 @@ def test_analyze_every_example_robot(capsys, name, floating):
         assert code == 2 and err.count("\n") == 1 and "is singular" in err and "move no mass" in err
         return
     assert code == 0, err
-    record = json.loads(out)
+    (record,) = json.loads(out)["configurations"]
     assert record["nv"] == len(record["diagonal"]) == len(record["eigenvalues"])
     assert np.isfinite(record["kappa"]) and record["kappa"] >= record["diagonal_ratio"] >= 1
 
@@ -129,7 +157,7 @@ def test_crosscheck_all_skips_what_cannot_load_with_the_reason(capsys, monkeypat
 
 def test_analyze_switches_to_the_linear_path_above_the_data_limit(capsys):
     code, out, err = run(capsys, "analyze", "chain:450", "--json")
-    record = json.loads(out)
+    (record,) = json.loads(out)["configurations"]
     assert code == 0 and err.count("\n") == 1 and "using the O(n) DeNOC path" in err
     assert record["method"] == "denoc-linear" and record["pivot_ratio_forward"] is None
     assert record["diagonal_ratio"] == pytest.approx(450**3, rel=1e-12)
@@ -150,7 +178,9 @@ def test_analyze_linear_path_agrees_with_crba(capsys):
         "--backend",
         "denoc",
     )
-    for a, b in zip(json.loads(dense), json.loads(linear), strict=True):
+    dense_records = json.loads(dense)["configurations"]
+    linear_records = json.loads(linear)["configurations"]
+    for a, b in zip(dense_records, linear_records, strict=True):
         assert a["q"] == b["q"]
         np.testing.assert_allclose(b["diagonal"], a["diagonal"], rtol=1e-12)
         for key in ("kappa", "lambda_min", "lambda_max", "pivot_ratio_backward"):
@@ -159,6 +189,6 @@ def test_analyze_linear_path_agrees_with_crba(capsys):
 
 def test_analyze_metrics_limit_the_linear_work(capsys):
     code, out, _ = run(capsys, "analyze", "chain:500", "--json", "--metrics", "diagonal_ratio")
-    record = json.loads(out)
+    (record,) = json.loads(out)["configurations"]
     assert code == 0 and record["kappa"] is None and record["pivot_ratio_backward"] is None
     assert record["diagonal_ratio"] == pytest.approx(500**3, rel=1e-12)

@@ -1,4 +1,4 @@
-"""Splice benchmarks/survey/table.md into README.md between the survey-table markers.
+"""Splice benchmarks/survey/table.md into docs/findings/survey.md between the survey-table markers.
 
 Run by `make survey` after `gimwatch survey all --samples 200 --trajectory -o benchmarks/survey`.
 """
@@ -29,7 +29,7 @@ def main(root: Path) -> int:
     body = (
         f"{len(record['robots'])} robots, {record['samples_per_robot']} random configurations "
         f"each + the neutral one, seed {record['seed']} (`make survey`; full report: "
-        f"[benchmarks/survey/report.md](benchmarks/survey/report.md)). Not surveyed: {failed}."
+        f"`benchmarks/survey/report.md`). Not surveyed: {failed}."
         f"{along}\n\n"
         + (folder / "table.md").read_text()
         + "\n`*`: no joint with a fixed base, surveyed with a free-flyer base. "
@@ -37,7 +37,7 @@ def main(root: Path) -> int:
         + ("" if runs is None else " `†`: floating base, not simulated (free fall).")
         + "\n"
     )
-    readme = root / "README.md"
+    readme = root / "docs" / "findings" / "survey.md"
     text = readme.read_text()
     if BEGIN not in text or END not in text:
         print(f"{readme}: no {BEGIN} ... {END} markers", file=sys.stderr)

@@ -279,7 +279,7 @@ def _verdict(table: Table, n: int, peer: bool) -> tuple[str, dict | None]:
         return "MuJoCo is not installed (`pip install gimwatch[peers]`): no peer rows.", None
     a = _acceptance(table, n)
     verdict = (
-        f"Acceptance: gimwatch's default simulation (DOP853, `aba`, δ watch on) reaching "
+        f"Target: gimwatch's default simulation (DOP853, `aba`, δ watch on) reaching "
         f"{TARGET_ERROR_RAD:g} rad final-state error on the {n}-link chain in at most half "
         f"the wall time MuJoCo's RK4 needs. Time to {TARGET_ERROR_RAD:g} rad, interpolated "
         f"log-log on each curve: gimwatch {a['gimwatch_dop853_interpolated_s']:.3g} s, MuJoCo "

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import datetime
 import io
+import os
 import platform
 import re
 from importlib.metadata import PackageNotFoundError, version
@@ -133,10 +134,15 @@ def write_report(
 
 
 def update_readme(readme: Path, env: dict, results: list[SectionResult], output: Path) -> Path:
-    """Replace the block between the bench markers in ``readme`` with the headlines.
+    """Replace the block between the bench markers in a Markdown page with the headlines.
+
+    The page is a docs page (``docs/findings/accuracy-costs.md``) or a README. Figures are
+    linked by a path relative to the page; from a docs page they go through the folder's link
+    in ``docs/`` (``docs/benchmarks`` → ``benchmarks``) when there is one, so that MkDocs
+    publishes them.
 
     Raises:
-        InputError: The README lacks the ``<!-- bench:start -->``/``<!-- bench:end -->`` markers.
+        InputError: The page lacks the ``<!-- bench:start -->``/``<!-- bench:end -->`` markers.
     """
     text = readme.read_text(encoding="utf-8")
     pattern = re.compile(re.escape(README_START) + r".*?" + re.escape(README_END), re.DOTALL)
@@ -144,10 +150,7 @@ def update_readme(readme: Path, env: dict, results: list[SectionResult], output:
         raise InputError(
             f"{readme}", f"a file with {README_START} and {README_END} markers", "no markers"
         )
-    try:
-        prefix = output.resolve().relative_to(readme.resolve().parent).as_posix() + "/"
-    except ValueError:
-        prefix = output.resolve().as_posix() + "/"
+    prefix = _figure_prefix(readme, output)
     blas = env["blas_threads"]
     body = [
         README_START,
@@ -155,15 +158,32 @@ def update_readme(readme: Path, env: dict, results: list[SectionResult], output:
         f"NumPy {env['numpy']}, SciPy {env['scipy']}; BLAS on one thread — on "
         f"{blas['threads_all']} threads a {blas['n']}x{blas['n']} `eigvalsh` was "
         f"{blas['ratio']:.3g}x slower in the same run). Full report: "
-        f"[`{prefix}report.md`]({prefix}report.md).",
+        f"`{Path(output).as_posix()}/report.md`.",
         "",
     ]
     for result in results:
-        body += [f"### {result.title}", "", result.headline.strip(), ""]
+        if not result.headline.strip() and not result.figures:
+            continue  # no empty headings
+        body += [f"## {result.title}", "", result.headline.strip(), ""]
         body += [f"![{f.stem}]({prefix}{f.name})" for f in result.figures[:1]] + [""]
     body.append(README_END)
     new = pattern.sub(lambda _: "\n".join(body), text)
     return write_text_atomic(readme, new)
+
+
+def _figure_prefix(page: Path, output: Path) -> str:
+    """The relative path from ``page`` to ``output`` ("../benchmarks/"), through a link if any.
+
+    The nearest folder above the page holding an entry named like ``output`` that resolves to
+    it (a symbolic link ``docs/benchmarks``, or ``output`` itself) is used.
+    """
+    target = Path(output).resolve()
+    page_dir = Path(page).absolute().parent
+    for folder in (page_dir, *page_dir.parents):
+        candidate = folder / target.name
+        if candidate.exists() and candidate.resolve() == target:
+            return Path(os.path.relpath(candidate, page_dir)).as_posix() + "/"
+    return target.as_posix() + "/"
 
 
 def markdown_table(rows: list[dict], columns: dict[str, str]) -> str:

@@ -146,14 +146,14 @@ def measure(context: BenchContext) -> Table:
 
 
 def run(context: BenchContext) -> SectionResult:
-    """Measure, plot ``watch_cost.png`` and summarise against issue 4's δ target."""
+    """Measure, plot ``watch_cost.png`` and summarise against the δ-cost target."""
     table = measure(context)
     figure = plot_watch_cost(table.rows, context.output / "watch_cost.png")
     n_max = max(r["n"] for r in table.rows)
     delta = next(r for r in table.rows if r["n"] == n_max and r["watch"] == "delta")
     met = delta["sample_vs_step"] < DELTA_TARGET
     verdict = (
-        f"Target (issue 4): watching δ costs under {DELTA_TARGET:.0%} of a bare ABA step for "
+        f"Target: watching δ costs under {DELTA_TARGET:.0%} of a bare ABA step for "
         f"a 20-link chain. Measured at n = {n_max}: one δ sample costs "
         f"{delta['sample_us']:.3g} µs = {delta['sample_vs_step']:.1%} of a bare RK4 + ABA "
         f"step ({delta['sample_us'] / delta['sample_vs_step']:.3g} µs) if it sampled every "

@@ -6,6 +6,7 @@ import argparse
 import sys
 
 from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import InputError
 from gimwatch.metrics.dense_analysis import analyze_configuration
 from gimwatch.model.robots import (
@@ -15,7 +16,6 @@ from gimwatch.model.robots import (
     parse_chain_spec,
     random_configurations,
 )
-from gimwatch.output.atomic import to_json
 
 NAME = "analyze"
 #: More configurations than this would print a table nobody reads; use ``survey``.
@@ -23,6 +23,24 @@ MAX_RANDOM = 100_000
 #: The O(n) path's largest chain: diag, pivots and κ stay O(n) (about 1 kB per link).
 LINEAR_NV_LIMIT = 200_000
 HELP = "conditioning of M(q): kappa, diagonal ratio, pivot ratios, spectrum"
+#: ``--csv`` columns, one row per configuration (vectors ``;``-separated).
+CSV_COLUMNS = (
+    "config",
+    "robot",
+    "nv",
+    "method",
+    "kappa",
+    "diagonal_ratio",
+    "pivot_ratio_forward",
+    "pivot_ratio_backward",
+    "lambda_min",
+    "lambda_max",
+    "max_diagonal_dof",
+    "min_diagonal_dof",
+    "q",
+    "eigenvalues",
+    "diagonal",
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -43,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
     parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
-    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_output_arguments(parser, what="configurations")
     parser.add_argument(
         "--backend",
         choices=("auto", "crba", "denoc"),
@@ -136,12 +154,16 @@ def run(args: argparse.Namespace) -> int:
         )
         data = robot.new_data()
         results = [analyze_configuration(robot, q, data=data) for q in configurations]
-    if args.json:
-        records = [r.to_dict() for r in results]
-        print(to_json(records[0] if len(records) == 1 else records))
-        return 0
     first = results[0]
     base = "floating" if args.floating else "fixed"
+    records = [{"config": i, **r.to_dict()} for i, r in enumerate(results)]
+    if args.json:
+        header = {"robot": first.robot, "nv": first.nv, "base": base, "method": first.method}
+        print(json_text({**header, "configurations": records}))
+        return 0
+    if args.csv:
+        print(csv_text(records, CSV_COLUMNS))
+        return 0
     print(f"{first.robot}: nv = {first.nv}, {base} base, method {first.method}")
     headers = [
         "config",

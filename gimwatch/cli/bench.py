@@ -27,7 +27,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--seed", type=non_negative_int, default=0, help="seed of every random draw"
     )
     parser.add_argument(
-        "--readme", default=None, help="regenerate this README's 'What accuracy costs' block"
+        "--page",
+        "--readme",
+        dest="page",
+        default=None,
+        metavar="FILE",
+        help="regenerate the block between the bench markers of this Markdown page "
+        "(make bench: docs/findings/accuracy-costs.md)",
     )
 
 
@@ -43,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
         args.output,
         quick=args.quick,
         progress=_progress,
-        readme=args.readme,
+        readme=args.page,
         seed=args.seed,
     )
     print(report.read_text())

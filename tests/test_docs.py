@@ -1,0 +1,96 @@
+"""Every ```python block in README.md and docs/**/*.md runs, from an empty folder.
+
+The blocks of one page run in order in one namespace (a page reads as one session). A block
+may be kept from running only with a stated reason, on the line just above its fence::
+
+    <!-- no-run: needs a MuJoCo licence server -->
+
+Other fences (``sh``, ``text``, ``toml``) are shown, not run. The pages are found by walking
+``docs/`` without following its links to ``benchmarks/`` (reports, not pages) and
+``notebooks/`` (run by ``pytest --nbmake``), plus the notebooks' README, which is a page.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FENCE = re.compile(r"^```(\S*)[^\n]*\n(.*?)^```\s*$", re.DOTALL | re.MULTILINE)
+NO_RUN = re.compile(r"<!--\s*no-run:\s*(.*?)\s*-->\s*$")
+
+
+@dataclass(frozen=True)
+class Block:
+    page: Path
+    line: int
+    code: str
+    skip_reason: str | None
+
+
+def doc_pages() -> list[Path]:
+    pages = [ROOT / "README.md", ROOT / "notebooks" / "README.md"]
+    for folder, dirs, files in os.walk(ROOT / "docs"):  # links to folders are not followed
+        dirs[:] = sorted(d for d in dirs if not (Path(folder) / d).is_symlink())
+        pages += [Path(folder) / f for f in sorted(files) if f.endswith(".md")]
+    return pages
+
+
+def python_blocks(page: Path) -> list[Block]:
+    text = page.read_text(encoding="utf-8")
+    blocks = []
+    for match in FENCE.finditer(text):
+        if match.group(1) not in ("python", "py"):
+            continue
+        before = text[: match.start()].rstrip("\n").rsplit("\n", 1)[-1]
+        marker = NO_RUN.search(before)
+        line = text.count("\n", 0, match.start()) + 1
+        blocks.append(Block(page, line, match.group(2), marker.group(1) if marker else None))
+    return blocks
+
+
+PAGES = [page for page in doc_pages() if python_blocks(page)]
+
+
+def test_pages_are_found():
+    names = {page.relative_to(ROOT).as_posix() for page in doc_pages()}
+    assert {"README.md", "docs/index.md", "docs/getting-started.md"} <= names, names
+    assert not any(name.startswith(("docs/benchmarks/", "docs/notebooks/")) for name in names)
+    assert {p.relative_to(ROOT).as_posix() for p in PAGES} >= {
+        "README.md",
+        "docs/getting-started.md",
+    }
+
+
+def test_fence_parser_reads_markers(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text(
+        "text\n```python\nx = 1\n```\n\n<!-- no-run: needs a robot arm -->\n```python\nboom\n```\n"
+        "```sh\nls\n```\n"
+    )
+    blocks = python_blocks(page)
+    assert [(b.line, b.code, b.skip_reason) for b in blocks] == [
+        (2, "x = 1\n", None),
+        (7, "boom\n", "needs a robot arm"),
+    ]
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.relative_to(ROOT).as_posix())
+def test_python_blocks_run(page, tmp_path, monkeypatch):
+    matplotlib.use("Agg")  # a block that plots must not open a window
+    monkeypatch.chdir(tmp_path)  # "runnable from any directory"
+    namespace: dict = {"__name__": "__docs__"}
+    ran = 0
+    for block in python_blocks(page):
+        if block.skip_reason is not None:
+            assert block.skip_reason, f"{page}:{block.line}: no-run needs a reason"
+            continue
+        code = compile(block.code, f"{page.relative_to(ROOT)}:{block.line}", "exec")
+        exec(code, namespace)
+        ran += 1
+    assert ran, f"{page}: every python block is marked no-run"
