@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import argparse
 import difflib
-import importlib
 import re
 import sys
 import warnings
 from collections.abc import Sequence
+from importlib import import_module  # bound now: tests may patch importlib
 from types import ModuleType
 
 from gimwatch._version import __version__
@@ -101,7 +101,7 @@ def _plain(text: str) -> str:
 
 def _commands() -> dict[str, ModuleType]:
     """Every command's module (imports them all; the command line imports only one)."""
-    return {name: importlib.import_module(module) for name, (module, _) in COMMANDS.items()}
+    return {name: import_module(module) for name, (module, _) in COMMANDS.items()}
 
 
 def get_argument_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -123,7 +123,7 @@ def get_argument_parser(command: str | None = None) -> argparse.ArgumentParser:
         if command is not None and name != command:
             sub.add_parser(name, help=summary)
             continue
-        module = importlib.import_module(module_name)
+        module = import_module(module_name)
         parser_ = sub.add_parser(
             name,
             help=module.HELP,

@@ -75,13 +75,20 @@ def _cholesky_lower(M: np.ndarray) -> np.ndarray:
 
 
 def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
-    """Eigenvalues of the GIM in ascending order (symmetric eigensolver, LAPACK syevd).
+    """Eigenvalues of the GIM in ascending order (symmetric eigensolver, LAPACK).
 
-    NumPy's solver rather than SciPy's: importing ``scipy.linalg`` costs about 0.2 s, more
-    than a whole ``gimwatch analyze`` of a small robot otherwise.
+    NumPy's ``syevd`` first: importing ``scipy.linalg`` costs about 0.2 s, more than a whole
+    ``gimwatch analyze`` of a small robot otherwise. When κ nears 1/eps, λmin is round-off
+    (about eps·λmax) and its sign depends on the LAPACK driver; a λmin ≤ 0 from ``syevd`` is
+    recomputed with SciPy's ``syevr`` (the driver gimwatch used before) before M is declared
+    not positive definite, so such numerically singular GIMs keep their former verdict.
     """
     M = check_gim(matrix)
     values = np.linalg.eigvalsh(M)
+    if values[0] <= 0:
+        import scipy.linalg
+
+        values = scipy.linalg.eigvalsh(M, check_finite=False)
     if values[0] <= 0:
         raise ConditioningError(
             f"the GIM must be positive definite, got smallest eigenvalue {values[0]:.6g}"
