@@ -94,3 +94,18 @@ def test_python_blocks_run(page, tmp_path, monkeypatch):
         exec(code, namespace)
         ran += 1
     assert ran, f"{page}: every python block is marked no-run"
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "notebooks").glob("*.ipynb")), ids=lambda p: p.name)
+def test_notebooks_are_stored_with_their_outputs(path):
+    """The docs render notebooks as stored (no execution at build time): outputs must be there."""
+    import json
+
+    cells = [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"]
+    assert cells and all(c["execution_count"] is not None for c in cells), "run and save it"
+    outputs = [o for c in cells for o in c["outputs"]]
+    assert outputs and not [o for o in outputs if o["output_type"] == "error"]
+    source = "".join("".join(c["source"]) for c in cells)
+    if "plt." in source:  # a figure is an image, not "<Figure size ...>" text (no Agg)
+        assert any("image/png" in o.get("data", {}) for o in outputs), path.name
+    assert 'matplotlib.use("Agg")' not in source

@@ -102,6 +102,7 @@ class Section:
 SECTIONS: dict[str, Section] = {
     s.name: s
     for s in (
+        Section("startup", "Startup and first contact", "gimwatch.bench.startup"),
         Section("conditioning", "Conditioning cost vs n", "gimwatch.bench.conditioning_cost"),
         Section("estimators", "Estimator quality vs cost", "gimwatch.bench.estimators"),
         Section("accuracy", "Forward-dynamics accuracy vs κ", "gimwatch.bench.accuracy"),
