@@ -273,3 +273,36 @@ def test_cost_and_long_chain_tables_are_the_committed_runs():
             rf"{round(float(row['peak_rss_mb']))} \|"
         )
         assert re.search(pattern, page), f"long-chains.md: no row {pattern!r}"
+
+
+def test_crosscheck_table_is_the_committed_run():
+    runs = {
+        base: json.loads((BENCH / "crosscheck" / f"{base}.json").read_text())
+        for base in ("fixed", "floating")
+    }
+    page = "docs/guide/crosscheck.md"
+    counts = _find(page, r"(\d+) fixed-base and (\d+) floating-base robots, all passed")
+    assert _numbers(counts) == [len(runs["fixed"]), len(runs["floating"])]
+    assert all(r["passed"] for rows in runs.values() for r in rows)
+
+    def worst(base, key):
+        values = [r[key] for r in runs[base] if r[key] is not None]
+        return f"{max(values):.2g}"
+
+    rows = {
+        r"\| GIM \| `crba` \|": "gim_rel_err",
+        r"\| diag GIM, O\(n\) \| diag `crba` \|": "gim_diagonal_rel_err",
+        r"\| τ \| `rnea` \|": "tau_rel_err",
+        r"\| q̈ backward error [^|]+ \| `aba` \|": "qdd_backward_err",
+        r"\| UDUᵀ pivots \| `cholesky.decompose` D \|": "pivots_rel_err",
+    }
+    for label, key in rows.items():
+        match = _find(page, label + r" ([\d.e+-]+) \| ([\d.e+-]+) \|")
+        assert list(match.groups()) == [worst("fixed", key), worst("floating", key)], key
+    forward = _find(page, r"\| q̈ forward error \| `aba` \| ([\d.e-]+) \((\w+), κ = ([\d.e+]+)\)")
+    value, robot, kappa = max(
+        (r["qdd_rel_err"], r["robot"], r["kappa_max"])
+        for r in runs["fixed"]
+        if r["qdd_rel_err"] is not None
+    )
+    assert forward.groups() == (f"{value:.2g}", robot, f"{kappa:.2g}".replace("+0", ""))
