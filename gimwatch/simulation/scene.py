@@ -45,6 +45,7 @@ BACKENDS = ("aba", "crba-cholesky", "denoc")
 METRIC_NAMES = (
     "kappa",
     "kappa_lanczos",
+    "kappa_tracked",
     "diagonal_ratio",
     "scaled_diagonal_ratio",
     "pivot_ratio_forward",
