@@ -18,7 +18,9 @@ t=$(now); "$PYTHON" -m venv "$WORK/venv"; "$WORK/venv/bin/pip" install --quiet .
 install_s=$(since "$t")
 cd "$WORK"   # the quick start runs from any directory
 t=$(now); "$WORK/venv/bin/gimwatch" analyze ur5 > analyze.txt; analyze_s=$(since "$t")
-sed -n '/^```python/,/^```/p' "$WORK/gimwatch/README.md" | sed '1d;$d' > quickstart.py
+# the quick start's Python block (the first one in the README)
+awk '/^```python/{n++; if (n == 1) {on = 1; next}} /^```$/{on = 0} on' \
+  "$WORK/gimwatch/README.md" > quickstart.py
 t=$(now); "$WORK/venv/bin/python" quickstart.py > quickstart.txt; python_s=$(since "$t")
 t=$(now); "$WORK/venv/bin/gimwatch" simulate "$WORK/gimwatch/scenes/chain_10.toml" -o run \
   > simulate.txt 2>/dev/null; simulate_s=$(since "$t")
