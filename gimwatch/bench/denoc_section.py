@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from threadpoolctl import threadpool_limits
 
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import plot_denoc_cost
@@ -159,7 +160,9 @@ def verdicts(rows: list[dict]) -> list[str]:
 
 def run(context: BenchContext) -> SectionResult:
     """Measure, plot ``denoc_cost.png`` and summarise the ratios."""
-    table = measure(context)
+    # BLAS on one thread, set here: the CLI's limit misses an OpenBLAS loaded after it
+    with threadpool_limits(limits=1, user_api="blas"):
+        table = measure(context)
     figure = plot_denoc_cost(table.rows, context.output / "denoc_cost.png")
     columns = {
         "n": "n",

@@ -179,7 +179,8 @@ class ScaledDiagonalRatioMetric(Metric):
     def __call__(self, state):
         if not self.estimator.calibrated:
             self.estimator.calibrate(state.M)
-        return self.estimator(state.diag)
+            return self.estimator(state.diag)
+        return self.estimator.alpha * state.delta  # Eq. 15 on the O(n) δ
 
 
 class PivotRatioForward(Metric):
