@@ -133,3 +133,19 @@ def test_crosscheck_and_stress_csv(capsys):
     (row,) = csv.DictReader(io.StringIO(out))
     assert code == 0 and row["case"] == "ur5-wrist-aligned" and row["passed"] == "True"
     assert float(row["error_aba"]) < 1e-12
+
+
+def test_mistyped_metric_names_get_a_suggestion(capsys):
+    from gimwatch.suggest import did_you_mean
+
+    assert did_you_mean("kapa", ["kappa", "rcond"]) == "; did you mean 'kappa'?"
+    assert did_you_mean("frobnicate", ["kappa", "rcond"]) == ""
+    with pytest.raises(gimwatch.SceneError) as error:
+        gimwatch.parse_scene(
+            {"robot": "chain:3", "duration": 1, "sample": 0.1, "watch": {"metrics": ["kapa"]}},
+            source="s.toml",
+        )
+    assert str(error.value).endswith("; did you mean 'kappa'?")
+    argv = ["analyze", "chain:500", "--backend", "denoc", "--metrics", "diagonal_ratoi"]
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and err.rstrip().endswith("(did you mean 'diagonal_ratio'?)"), err

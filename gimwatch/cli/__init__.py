@@ -11,7 +11,6 @@ status 2; a mistyped command gets a suggestion.
 from __future__ import annotations
 
 import argparse
-import difflib
 import re
 import sys
 import warnings
@@ -21,6 +20,7 @@ from types import ModuleType
 
 from gimwatch._version import __version__
 from gimwatch.errors import GimwatchError
+from gimwatch.suggest import did_you_mean
 
 __all__ = ["get_argument_parser", "main"]
 
@@ -146,8 +146,7 @@ def _command_in(argv: Sequence[str]) -> str | None:
             continue
         if word in COMMANDS:
             return word
-        close = difflib.get_close_matches(word, COMMANDS, n=3, cutoff=0.7)
-        hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        hint = did_you_mean(word, COMMANDS)
         raise UsageError(f"unknown command {word!r}{hint} (commands: {', '.join(COMMANDS)})")
     return None
 

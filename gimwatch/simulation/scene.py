@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from gimwatch.errors import SceneError
+from gimwatch.suggest import did_you_mean
 
 __all__ = [
     "BACKENDS",
@@ -350,7 +351,9 @@ def _watch(reader: _Reader) -> WatchSpec:
     for metric in metrics:
         if metric not in METRIC_NAMES:
             raise reader.fail(
-                "metrics", f"unknown metric {metric!r}; expected one of {', '.join(METRIC_NAMES)}"
+                "metrics",
+                f"unknown metric {metric!r}; expected one of {', '.join(METRIC_NAMES)}"
+                + did_you_mean(metric, METRIC_NAMES),
             )
     if len(set(metrics)) != len(metrics):
         raise reader.fail("metrics", f"lists a metric twice: {metrics!r}")
