@@ -84,6 +84,7 @@ def counters(monkeypatch):
     from gimwatch.denoc.lean import LeanModel
 
     wrap(LeanModel, "gim_diagonal", "diag")  # the watch's compiled O(n) diagonal
+    wrap(LeanModel, "diagonal_ratio", "diag")  # … and δ from it in the same call
     return counts
 
 

@@ -128,6 +128,13 @@ SECTIONS: dict[str, Section] = {
             "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
         ),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),
+        Section("lean", "δ at the cost of its arithmetic", "gimwatch.bench.lean_cost"),
+        Section(
+            "tracker",
+            "κ tracked at O(n) per sample",
+            "gimwatch.bench.tracker_cost",
+            ("gimwatch.simulation.simulate",),
+        ),
         Section(
             "tighten",
             "Tightening the tolerance on alarm",

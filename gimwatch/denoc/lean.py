@@ -113,6 +113,24 @@ class LeanModel:
         if not ok:
             raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
 
+    def compiled_operator_arguments(self) -> tuple:
+        """The buffers the compiled products read after :meth:`configure`.
+
+        :func:`.fused.gim_product` and :func:`.fused.gim_solve` take them after x and before
+        out: (index, floating, rot, vec, block, six, scal, root). For compiled callers (the
+        κ tracker's Krylov loop) that call the products directly.
+        """
+        return (
+            self._index,
+            self.floating,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            self._scal,
+            self._root,
+        )
+
     def gim_product(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """M(q) x at the configured q, O(n)."""
         out = np.empty(self.nv) if out is None else out

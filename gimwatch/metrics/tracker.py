@@ -45,6 +45,7 @@ import numpy.typing as npt
 import scipy.linalg
 from numba import njit
 
+from gimwatch.denoc import fused
 from gimwatch.errors import ConditioningError, InputError
 
 __all__ = ["KappaTracker", "TrackedKappa", "track_kappa"]
@@ -82,8 +83,10 @@ class TrackedKappa:
 class _Operator:
     """One end: the symmetric operator x ↦ A x and the Ritz block it carries over."""
 
-    def __init__(self, apply: Callable[[np.ndarray], np.ndarray], n: int, keep: int = 2) -> None:
-        self.apply, self.n, self.keep = apply, n, keep
+    def __init__(
+        self, apply: Callable[[np.ndarray], np.ndarray], n: int, keep: int = 2, which: int = 0
+    ) -> None:
+        self.apply, self.n, self.keep, self.which = apply, n, keep, which
         self.block: np.ndarray | None = None
         self.theta = math.nan
         self.count = 0
@@ -228,6 +231,73 @@ def _leading(
                 break
 
 
+@njit(cache=True)
+def _apply_lean(which, x, out, index, floating, rot, vec, block, six, scal, root):
+    """Write M x (which = 0) or M⁻¹ x (which = 1) into out, by DeNOC's compiled recursions."""
+    if which == 0:
+        fused.gim_product(x, index, floating, rot, vec, block, six, out)
+    else:
+        fused.gim_solve(x, index, floating, rot, vec, block, six, scal, root, out)
+
+
+@njit(cache=True)
+def _leading_lean(
+    which,
+    starts,
+    rtol,
+    budget,
+    keep_block,
+    check_every,
+    index,
+    floating,
+    rot,
+    vec,
+    block,
+    six,
+    scal,
+    root,
+):
+    """:func:`_leading` compiled whole, on DeNOC's products: no Python per product.
+
+    Returns:
+        (θ, the top Ritz vectors as columns, error estimate, converged, products used).
+    """
+    n = starts.shape[1]
+    size = min(_MAX_BASIS, n)
+    V = np.empty((size, n)).T  # columns contiguous
+    AV = np.empty((size, n)).T
+    H = np.zeros((size, size))
+    out = np.empty(n)
+    m = used = 0
+    for k in range(starts.shape[0]):
+        if m < size and _orthonormalize_into(V, m, starts[k].copy()):
+            _apply_lean(which, V[:, m], out, index, floating, rot, vec, block, six, scal, root)
+            AV[:, m] = out
+            _h_column(V, AV, H, m)
+            m += 1
+            used += 1
+    while True:
+        keep = min(keep_block, m)
+        ritz = np.empty((n, keep))
+        restart = m + check_every > size
+        theta, rnorm, second, grown = _ritz(V, AV, H, m, keep, ritz, restart)
+        gap = theta - second if m >= 2 else abs(theta)
+        estimate = rnorm * rnorm / (theta * gap) if theta > 0 and gap > 0 else np.inf
+        converged = m == n or (theta > 0 and estimate <= rtol)
+        stuck = grown == (keep if restart else m)
+        if converged or used >= budget or stuck:
+            return theta, ritz, (0.0 if m == n else estimate), converged, used
+        m = grown - 1
+        for _ in range(check_every):
+            _apply_lean(which, V[:, m], out, index, floating, rot, vec, block, six, scal, root)
+            AV[:, m] = out
+            used += 1
+            more = _lanczos_next(V, AV, H, m)
+            m += 1
+            if not more or m == size or used >= budget:
+                break
+
+
 class KappaTracker:
     """Tracks κ₂(M(q)) sample after sample from O(n) products (see the module docstring).
 
@@ -269,8 +339,11 @@ class KappaTracker:
         self._rng = np.random.default_rng(seed)
         self._ends = (
             _Operator(products.gim_product, self.nv, blocks[0]),
-            _Operator(products.gim_solve, self.nv, blocks[1]),
+            _Operator(products.gim_solve, self.nv, blocks[1], 1),
         )
+        # DeNOC's products: the whole Krylov loop runs compiled, calling them directly
+        arguments = getattr(products, "compiled_operator_arguments", None)
+        self._compiled = arguments() if arguments is not None else None
 
     def eigenvectors(self) -> tuple[np.ndarray, np.ndarray]:
         """The last sample's eigenvectors of λmax and of λmin (unit vectors)."""
@@ -291,13 +364,21 @@ class KappaTracker:
             return counting(x)
 
         counted = _Operator(apply, end.n, end.keep)
+
+        def leading(starts: list[np.ndarray], budget: int):
+            if self._compiled is None:
+                return _leading(counted, starts, rtol=self.rtol, budget=budget, keep_block=end.keep)
+            theta, block, estimate, ok, used = _leading_lean(
+                end.which, np.array(starts), self.rtol, budget, end.keep, 4, *self._compiled
+            )
+            end.count += used
+            return float(theta), block, float(estimate), bool(ok)
+
         fallback = ""
         result = None
         if end.block is not None:
             starts = [*end.block.T, self._probe()]
-            theta, block, estimate, ok = _leading(
-                counted, starts, rtol=self.rtol, budget=self.warm_products, keep_block=end.keep
-            )
+            theta, block, estimate, ok = leading(starts, self.warm_products)
             moved = abs(theta - end.theta) > self.jump * abs(end.theta)
             if ok and not moved:
                 result = (theta, block, estimate)
@@ -307,9 +388,7 @@ class KappaTracker:
             fallback = "start"
         if result is None:
             starts = [self._probe(), *([] if end.block is None else end.block.T)]
-            theta, block, estimate, ok = _leading(
-                counted, starts, rtol=self.rtol, budget=self.max_products, keep_block=end.keep
-            )
+            theta, block, estimate, ok = leading(starts, self.max_products)
             if ok:
                 result = (theta, block, estimate)
         if result is None:
