@@ -1,6 +1,5 @@
 import math
 
-import mpmath
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -68,16 +67,6 @@ def test_bias_is_pinocchio_nonlinear_effects():
     expected = pin.nonLinearEffects(model, model.createData(), q, v)
     got = np.array([float(b) for b in PlanarChainReference(spec).bias(q, v)])
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12)
-
-
-def test_reference_keeps_its_digits_where_float64_loses_them():
-    # A straight 10-link chain (κ ≈ 4e4): 50 and 40 digits agree to far below float64 eps.
-    spec, n = chain_spec(10), 10
-    q, v, tau = np.zeros(n), np.full(n, 0.5), np.linspace(-1, 1, n)
-    a50 = planar_reference(spec, q, v, tau, dps=50)
-    a40 = planar_reference(spec, q, v, tau, dps=40)
-    np.testing.assert_array_equal(a50, a40)
-    assert mpmath.mp.dps == 15  # the working precision is restored
 
 
 def test_non_planar_chain_is_refused():

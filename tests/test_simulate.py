@@ -1,9 +1,8 @@
 import numpy as np
 import pinocchio as pin
 import pytest
+from closed_forms import rod_chain_energy, rod_chain_gim
 
-from gimwatch.metrics.dense_analysis import analyze_configuration
-from gimwatch.model.robots import load_robot
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import Simulation, run_scene
 
@@ -20,6 +19,20 @@ def scene(robot="chain:4", *, duration=1.0, sample=0.01, effects=None, integrato
     return parse_scene(table, source="test.toml")
 
 
+#: Relative energy drifts published for the demo's 5 s swings (README, DOP853 at 1e-10,
+#: sampled every 10 ms); checked here with DRIFT_MARGIN, sampled every 50 ms.
+PUBLISHED_DRIFT = {4: 7.6e-11, 10: 2.4e-11, 20: 3.3e-12}
+DRIFT_MARGIN = 3.0
+
+
+def _closed_form_drift(trajectory):
+    """Relative drift max|E − E0| / max(|E0|, peak KE) from the rod formulas (closed_forms)."""
+    states = zip(trajectory.q, trajectory.v, strict=True)
+    parts = np.array([rod_chain_energy(q, v) for q, v in states])
+    total = parts.sum(axis=1)
+    return np.abs(total - total[0]).max() / max(abs(total[0]), parts[:, 0].max()), parts
+
+
 @pytest.mark.parametrize("n", [4, 10, 20])
 def test_swinging_chain_conserves_energy_and_worst_kappa_is_near_4n4(n):
     trajectory = run_scene(
@@ -32,16 +45,20 @@ def test_swinging_chain_conserves_energy_and_worst_kappa_is_near_4n4(n):
         )
     )
     assert trajectory.status == "completed" and trajectory.t[-1] == pytest.approx(5.0)
-    drift = trajectory.energy_drift()
-    assert drift < 1e-8, drift
+    # energy from the closed-form rod chain on the saved states, not from gimwatch
+    drift, parts = _closed_form_drift(trajectory)
+    assert drift <= DRIFT_MARGIN * PUBLISHED_DRIFT[n], drift
+    np.testing.assert_allclose(trajectory.energy, parts.sum(axis=1), rtol=0, atol=1e-11 * n**2)
+    assert trajectory.energy_drift() == pytest.approx(drift, rel=0.05, abs=1e-13)
+    assert trajectory.kinetic_peak == pytest.approx(parts[:, 0].max(), rel=1e-9)
     # the chain really swung: kinetic energy of the order of the potential energy released
-    assert trajectory.kinetic_peak > 0.1 * ROD_MASS * 9.81 * n
+    assert parts[:, 0].max() > 0.1 * ROD_MASS * 9.81 * n
     worst = trajectory.watch["watch_kappa"].max()
     assert worst == pytest.approx(4 * n**4, rel=0.15), (worst, 4 * n**4)
-    # independent check of the watch: analyze the saved configuration again
-    k = len(trajectory.t) // 2
-    again = analyze_configuration(load_robot(f"chain:{n}"), trajectory.q[k]).kappa
-    assert trajectory.watch["watch_kappa"][k] == pytest.approx(again, rel=1e-12)
+    # the watch's κ at every sample against numpy on the closed-form M of the saved q
+    kappa = [np.linalg.eigvalsh(rod_chain_gim(q)) for q in trajectory.q]
+    kappa = np.array([w[-1] / w[0] for w in kappa])
+    np.testing.assert_allclose(trajectory.watch["watch_kappa"], kappa, rtol=1e-9)
 
 
 def test_backends_agree_on_the_4_link_trajectory():
@@ -67,14 +84,20 @@ def _reference_4_link(duration):
     )
 
 
+#: Observed orders published in docs/guide/simulate.md (4-link chain, 0.5 s, against DOP853
+#: at 1e-13), checked here with ORDER_MARGIN.
+PUBLISHED_ORDERS = {"RK4": (3.94, 3.97), "semi-implicit-euler": (1.00, 1.00)}
+ORDER_MARGIN = 0.02
+
+
 @pytest.mark.parametrize(
-    ("method", "order", "dts"),
+    ("method", "dts"),
     [
-        ("RK4", 4, (0.01, 0.005, 0.0025)),
-        ("semi-implicit-euler", 1, (0.001, 0.0005, 0.00025)),
+        ("RK4", (0.01, 0.005, 0.0025)),
+        ("semi-implicit-euler", (0.001, 0.0005, 0.00025)),
     ],
 )
-def test_fixed_step_integrators_converge_at_their_order(method, order, dts):
+def test_fixed_step_integrators_converge_at_their_order(method, dts):
     duration = 0.5
     reference = _reference_4_link(duration)
     errors = []
@@ -91,7 +114,9 @@ def test_fixed_step_integrators_converge_at_their_order(method, order, dts):
         x_ref = np.concatenate((reference.q[-1], reference.v[-1]))
         errors.append(np.abs(x - x_ref).max())
     observed = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
-    assert np.all(np.abs(observed - order) < 0.3), (errors, observed)
+    low, high = PUBLISHED_ORDERS[method]
+    assert np.all(observed >= low - ORDER_MARGIN), (errors, observed)
+    assert np.all(observed <= high + ORDER_MARGIN), (errors, observed)
 
 
 @pytest.mark.parametrize("method", ["RK45", "DOP853", "Radau", "LSODA"])

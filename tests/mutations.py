@@ -1,0 +1,419 @@
+"""Planted bugs the tests must catch: ``make mutation`` (or ``python tests/mutations.py``).
+
+Each mutant is a small textual patch (file, old text, new text) in one numerical core, with
+the fast test subset that should catch it. The runner copies the working tree to a temporary
+directory (never touching the real tree), applies one patch at a time there, runs the subset
+with that copy first on ``PYTHONPATH``, and reports each mutant as
+
+* ``caught`` — the subset failed (what we want);
+* ``MISSED`` — the subset passed with the bug in place (a test to strengthen);
+* ``stale`` — the old text is not in the file exactly once (the code moved: update the
+  mutant, don't let it pass silently);
+* ``timeout`` — the subset did not finish in time (counted as not caught).
+
+Before the mutants, each distinct subset runs once on the unmutated copy and must pass. Exit
+status 0 only when every mutant is caught. Not part of ``make test`` (it takes minutes).
+
+Usage: ``python tests/mutations.py [--jobs 2] [--timeout 600] [--list] [ID ...]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+IGNORED = (".git", ".venv", "site", "demo-output", ".pytest_cache", "__pycache__", "*.egg-info")
+
+
+@dataclass(frozen=True)
+class Mutant:
+    """One planted bug: replace ``old`` by ``new`` in ``path``; ``tests`` should catch it."""
+
+    id: str
+    path: str
+    old: str
+    new: str
+    tests: tuple[str, ...]
+    why: str = ""
+
+
+DENOC = ("tests/test_denoc.py",)
+LONG = ("tests/test_longchain.py",)
+STRESS_QUICK = ("tests/test_stress.py", "-m", "not slow")
+
+MUTANTS = (
+    # --- DeNOC recursions (numpy, gimwatch/denoc/recursions.py) ---
+    Mutant(
+        "denoc-composite-half",
+        "gimwatch/denoc/recursions.py",
+        "accumulate(composite, tree.parent[level], shifted)",
+        "accumulate(composite, tree.parent[level], 0.5 * shifted)",
+        DENOC,
+        "composite mass matrices (Eq. 12) pass half the child's inertia",
+    ),
+    Mutant(
+        "denoc-diagonal-1e-9",
+        "gimwatch/denoc/recursions.py",
+        'return np.einsum("ki,kij,kj->k", columns, composite[body], columns)',
+        'return np.einsum("ki,kij,kj->k", columns, composite[body], columns) * (1 + 1e-9)',
+        DENOC,
+        "diag M off by 1e-9 relative",
+    ),
+    Mutant(
+        "denoc-prismatic-coriolis",
+        "gimwatch/denoc/recursions.py",
+        "pri * 2.0 * cross(w, axis_rate)",
+        "pri * 1.0 * cross(w, axis_rate)",
+        DENOC,
+        "Coriolis term of prismatic joints halved",
+    ),
+    Mutant(
+        "denoc-articulated-pass",
+        "gimwatch/denoc/recursions.py",
+        "U[level][:, :, None] * U[level][:, None, :] / d[:, None, None]",
+        "U[level][:, :, None] * U[level][:, None, :] / (2.0 * d[:, None, None])",
+        DENOC,
+        "articulated inertia passed to the parent with half the correction",
+    ),
+    Mutant(
+        "denoc-gravity-sign",
+        "gimwatch/denoc/recursions.py",
+        "return np.concatenate([np.zeros(3), -np.asarray(gravity, dtype=float)])",
+        "return np.concatenate([np.zeros(3), np.asarray(gravity, dtype=float)])",
+        DENOC,
+        "gravity as a downward base acceleration",
+    ),
+    # --- compiled O(n) recursions (gimwatch/denoc/compiled.py) ---
+    Mutant(
+        "compiled-diagonal-1e-9",
+        "gimwatch/denoc/compiled.py",
+        "diag[i] = _p_dot(joint_type[i], e[i], column)",
+        "diag[i] = _p_dot(joint_type[i], e[i], column) * (1.0 + 1e-9)",
+        LONG,
+        "O(n) diagonal off by 1e-9 relative",
+    ),
+    Mutant(
+        "compiled-factor-1e-12",
+        "gimwatch/denoc/compiled.py",
+        "articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / pivot",
+        "articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / (pivot * (1.0 + 1e-12))",
+        LONG + STRESS_QUICK[:1] + ("-m", "not slow"),
+        "articulated-body factor off by 1e-12 relative",
+    ),
+    Mutant(
+        "compiled-gravity-1e-10",
+        "gimwatch/denoc/compiled.py",
+        "a[3 + k] = -gravity[k]",
+        "a[3 + k] = -gravity[k] * (1.0 + 1e-10)",
+        LONG + STRESS_QUICK[:1] + ("-m", "not slow"),
+        "gravity 1e-10 too strong in the O(n) forward dynamics",
+    ),
+    Mutant(
+        "compiled-prismatic-coriolis",
+        "gimwatch/denoc/compiled.py",
+        "bias_acc[i, 3 + k] += 2.0 * t1[k] * qd[i]",
+        "bias_acc[i, 3 + k] += 1.0 * t1[k] * qd[i]",
+        LONG,
+        "Coriolis term of prismatic joints halved (compiled)",
+    ),
+    # --- mpmath references ---
+    Mutant(
+        "planar-reference-30-digits",
+        "gimwatch/stress/reference_planar.py",
+        "REFERENCE_DIGITS = 50",
+        "REFERENCE_DIGITS = 30",
+        ("tests/test_reference_precision.py",),
+        "the planar reference at 30 digits",
+    ),
+    Mutant(
+        "tree-reference-30-digits",
+        "gimwatch/stress/reference_tree.py",
+        "REFERENCE_DIGITS = 50",
+        "REFERENCE_DIGITS = 30",
+        ("tests/test_reference_precision.py",),
+        "the tree reference at 30 digits",
+    ),
+    Mutant(
+        "tree-reference-15-digits",
+        "gimwatch/stress/reference_tree.py",
+        "REFERENCE_DIGITS = 50",
+        "REFERENCE_DIGITS = 15",
+        STRESS_QUICK,
+        "the tree reference at 15 digits (the stress suite's own tests must notice)",
+    ),
+    Mutant(
+        "planar-reference-own-inertia",
+        "gimwatch/stress/reference_planar.py",
+        "(3 * r[k] ** 2 + l[k] ** 2) / 12",
+        "(3 * r[k] ** 2 + l[k] ** 2) / 11.999999",
+        ("tests/test_reference.py",),
+        "rod inertia about its centre off by 1e-7",
+    ),
+    Mutant(
+        "tree-reference-mass-1e-13",
+        "gimwatch/stress/reference_tree.py",
+        "out[a + 3][a + 3] = m",
+        'out[a + 3][a + 3] = m * (1 + mpmath.mpf("1e-13"))',
+        ("tests/test_stress.py", "-k", "tree_reference"),
+        "spatial inertia's mass off by 1e-13",
+    ),
+    # --- conditioning (κ, δ, pivots, αδ) ---
+    Mutant(
+        "kappa-1e-7",
+        "gimwatch/metrics/conditioning.py",
+        "return float(values[-1] / values[0])",
+        "return float(values[-1] / values[0]) * (1 + 1e-7)",
+        ("tests/test_conditioning.py", "tests/test_stress_properties.py"),
+        "κ off by 1e-7 relative",
+    ),
+    Mutant(
+        "delta-1e-9",
+        "gimwatch/metrics/conditioning.py",
+        "return float(diag.max() / diag.min())",
+        "return float(diag.max() / diag.min()) * (1 + 1e-9)",
+        ("tests/test_conditioning.py", "tests/test_watch.py"),
+        "δ off by 1e-9 relative",
+    ),
+    Mutant(
+        "udut-pivots-order",
+        "gimwatch/metrics/conditioning.py",
+        "return (np.diag(_cholesky_lower(M[::-1, ::-1])) ** 2)[::-1]",
+        "return (np.diag(_cholesky_lower(M)) ** 2)[::-1]",
+        ("tests/test_conditioning.py",),
+        "backward pivots computed in the forward order",
+    ),
+    Mutant(
+        "alpha-1e-3",
+        "gimwatch/metrics/conditioning.py",
+        "self._alpha = condition_number(M) / diagonal_ratio(M)",
+        "self._alpha = condition_number(M) / diagonal_ratio(M) * 1.001",
+        ("tests/test_conditioning.py",),
+        "α of αδ (Eq. 15) off by 1e-3",
+    ),
+    Mutant(
+        "linear-pivot-ratio",
+        "gimwatch/metrics/linear_analysis.py",
+        "backward = float(pivots.max() / pivots.min())",
+        "backward = float(pivots.max() / pivots.min()) * 1.001",
+        LONG,
+        "O(n) backward pivot ratio off by 1e-3",
+    ),
+    Mutant(
+        "pinocchio-diagonal-parallel-axis",
+        "gimwatch/model/inertia.py",
+        "force[3:] += skew @ force[:3]",
+        "force[3:] += 0.999 * skew @ force[:3]",
+        ("tests/test_inertia.py",),
+        "parallel-axis term of the O(n) Pinocchio diagonal off by 1e-3",
+    ),
+    # --- energy and drift ---
+    Mutant(
+        "drift-always-zero",
+        "gimwatch/simulation/simulate.py",
+        "deviation = float(np.max(np.abs(self.energy - self.energy[0])))",
+        "deviation = 0.0 * float(np.max(np.abs(self.energy - self.energy[0])))",
+        ("tests/test_simulate.py", "-k", "swinging"),
+        "a drift function that always returns 0",
+    ),
+    Mutant(
+        "pinocchio-kinetic-energy-1e-9",
+        "gimwatch/simulation/backends.py",
+        "return float(kinetic), float(pin.computePotentialEnergy(model, data, q))",
+        "return float(kinetic) * (1 + 1e-9), float(pin.computePotentialEnergy(model, data, q))",
+        ("tests/test_simulate.py", "-k", "swinging"),
+        "kinetic energy off by 1e-9 relative",
+    ),
+    Mutant(
+        "denoc-kinetic-energy-1e-9",
+        "gimwatch/denoc/model.py",
+        "kinetic = 0.5 * float(velocity @ state.matvec(velocity))",
+        "kinetic = 0.5 * float(velocity @ state.matvec(velocity)) * (1 + 1e-9)",
+        LONG,
+        "DeNOC kinetic energy off by 1e-9 relative",
+    ),
+    # --- Lanczos ---
+    Mutant(
+        "lanczos-stops-at-1e-3",
+        "gimwatch/denoc/linear.py",
+        "if exhausted or change <= rtol:",
+        "if exhausted or change <= max(rtol, 1e-3):",
+        ("tests/test_longchain.py", "-k", "lanczos or closed_forms"),
+        "plain Lanczos stopping at 1e-3",
+    ),
+    Mutant(
+        "lanczos-300-steps",
+        "gimwatch/denoc/linear.py",
+        "max_steps: int = 3000",
+        "max_steps: int = 300",
+        ("tests/test_longchain.py", "-k", "lanczos or closed_forms"),
+        "plain Lanczos cut at 300 steps",
+    ),
+    Mutant(
+        "arpack-tol-1e-3",
+        "gimwatch/metrics/matrix_free.py",
+        'eigsh(operator, k=1, which="LA", v0=v0, tol=tol)',
+        'eigsh(operator, k=1, which="LA", v0=v0, tol=max(tol, 1e-3))',
+        ("tests/test_matrix_free.py",),
+        "ARPACK stopping at 1e-3",
+    ),
+    # --- stress bounds ---
+    Mutant(
+        "stress-constant-1e5",
+        "gimwatch/stress/suite.py",
+        "return 10.0 * math.sqrt(nv)",
+        "return 1e5 * math.sqrt(nv)",
+        STRESS_QUICK,
+        "C of C·κ·eps made 10⁴ times larger",
+    ),
+    Mutant(
+        "stress-bound-ignored",
+        "gimwatch/stress/suite.py",
+        "e is not None and np.isfinite(e) and e <= bound",
+        "e is not None and np.isfinite(e) and e <= 1e5 * bound",
+        STRESS_QUICK,
+        "the suite's pass check ignores its bound",
+    ),
+    # --- watch sampling ---
+    Mutant(
+        "watch-alarm-every-sample",
+        "gimwatch/metrics/watch.py",
+        "if above and not self._alarm_on:",
+        "if above:",
+        ("tests/test_watch.py",),
+        "an alarm on every sample above the threshold, not on the crossing",
+    ),
+    Mutant(
+        "watch-alarm-never-rearms",
+        "gimwatch/metrics/watch.py",
+        "self._alarm_on = above",
+        "self._alarm_on = self._alarm_on or above",
+        ("tests/test_watch.py",),
+        "the alarm never re-arms after the metric falls back below the threshold",
+    ),
+    Mutant(
+        "watch-scaled-recalibrates",
+        "gimwatch/metrics/watch.py",
+        "        if not self.estimator.calibrated:\n            self.estimator.calibrate(state.M)\n"
+        "        return self.estimator(state.diag)",
+        "        self.estimator = conditioning.ScaledDiagonalRatio()\n"
+        "        self.estimator.calibrate(state.M)\n        return self.estimator(state.diag)",
+        ("tests/test_watch.py",),
+        "αδ recalibrated at every sample (then it equals κ, tuned after the fact)",
+    ),
+)
+
+
+def _copy_tree(destination: Path) -> Path:
+    shutil.copytree(ROOT, destination, ignore=shutil.ignore_patterns(*IGNORED), symlinks=True)
+    return destination
+
+
+def _run_tests(tree: Path, tests: tuple[str, ...], timeout: float) -> tuple[str, float]:
+    env = {**os.environ, "PYTHONPATH": str(tree), "PYTHONDONTWRITEBYTECODE": "1"}
+    command = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider"]
+    command += ["-p", "no:xdist", *tests]
+    start = time.perf_counter()
+    try:
+        result = subprocess.run(
+            command, cwd=tree, env=env, capture_output=True, text=True, timeout=timeout
+        )
+    except subprocess.TimeoutExpired:
+        return "timeout", time.perf_counter() - start
+    elapsed = time.perf_counter() - start
+    if result.returncode == 0:
+        return "passed", elapsed
+    if result.returncode == 1:
+        return "failed", elapsed
+    return f"error (pytest exit {result.returncode})", elapsed
+
+
+def _apply(tree: Path, mutant: Mutant) -> str | None:
+    """Patch the copy; the original text, or None when the patch is stale."""
+    path = tree / mutant.path
+    if not path.exists():
+        return None
+    text = path.read_text()
+    if text.count(mutant.old) != 1:
+        return None
+    path.write_text(text.replace(mutant.old, mutant.new))
+    return text
+
+
+def _run_mutant(tree: Path, mutant: Mutant, timeout: float) -> tuple[str, float]:
+    original = _apply(tree, mutant)
+    if original is None:
+        return "stale", 0.0
+    try:
+        outcome, elapsed = _run_tests(tree, mutant.tests, timeout)
+    finally:
+        (tree / mutant.path).write_text(original)
+    status = {"failed": "caught", "passed": "MISSED", "timeout": "timeout"}.get(outcome, outcome)
+    return status, elapsed
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the mutants (all, or the named ones) and print caught/missed per mutant."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("ids", nargs="*", help="mutant ids (default: all)")
+    parser.add_argument("--jobs", type=int, default=2, help="mutants run in parallel")
+    parser.add_argument("--timeout", type=float, default=900.0, help="seconds per test run")
+    parser.add_argument("--list", action="store_true", help="list the mutants and exit")
+    args = parser.parse_args(argv)
+    known = {m.id: m for m in MUTANTS}
+    if len(known) != len(MUTANTS):
+        raise SystemExit("duplicate mutant ids")
+    if args.list:
+        for m in MUTANTS:
+            print(f"{m.id:34} {m.path:40} {m.why}")
+        return 0
+    unknown = [i for i in args.ids if i not in known]
+    if unknown:
+        print(f"unknown mutant ids: {', '.join(unknown)}", file=sys.stderr)
+        return 2
+    selected = [known[i] for i in args.ids] if args.ids else list(MUTANTS)
+    jobs = max(1, min(args.jobs, len(selected)))
+    with tempfile.TemporaryDirectory(prefix="gimwatch-mutation-") as scratch:
+        trees = [_copy_tree(Path(scratch) / f"tree{k}") for k in range(jobs)]
+        subsets = sorted({m.tests for m in selected})
+        print(f"baseline: {len(subsets)} test subsets on the unmutated copy", file=sys.stderr)
+        for tests in subsets:
+            outcome, elapsed = _run_tests(trees[0], tests, args.timeout)
+            if outcome != "passed":
+                print(f"baseline {' '.join(tests)}: {outcome}; fix the tests first")
+                return 1
+            print(f"  {' '.join(tests)}: passed in {elapsed:.0f} s", file=sys.stderr)
+        queue = list(enumerate(selected))
+        results: dict[int, tuple[str, float]] = {}
+
+        def worker(k: int) -> None:
+            while queue:
+                try:
+                    index, mutant = queue.pop(0)
+                except IndexError:
+                    return
+                results[index] = _run_mutant(trees[k], mutant, args.timeout)
+                status, elapsed = results[index]
+                print(f"  {mutant.id}: {status} ({elapsed:.0f} s)", file=sys.stderr)
+
+        with ThreadPoolExecutor(jobs) as pool:
+            list(pool.map(worker, range(jobs)))
+    print(f"{'mutant':34} {'file':40} {'status':8} {'s':>5}")
+    for index, mutant in enumerate(selected):
+        status, elapsed = results[index]
+        print(f"{mutant.id:34} {mutant.path:40} {status:8} {elapsed:5.0f}")
+    caught = sum(results[i][0] == "caught" for i in results)
+    print(f"caught {caught}/{len(selected)} ({100.0 * caught / len(selected):.0f} %)")
+    return 0 if caught == len(selected) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
