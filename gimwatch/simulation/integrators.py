@@ -123,83 +123,6 @@ def register(cls: type[Integrator]) -> type[Integrator]:
     return cls
 
 
-# -- fixed step -------------------------------------------------------------------------
-class FixedStepIntegrator(Integrator):
-    """Steps of ``spec.dt``, re-anchored at every step; samples every ``sample / dt`` steps."""
-
-    fixed_step = True
-
-    def step(
-        self,
-        f: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
-        chart: LocalChart,
-        t: float,
-        q: np.ndarray,
-        v: np.ndarray,
-        dt: float,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """One step from (t, q, v): the new (q, v), with q = chart.integrate(q, Δq)."""
-        raise NotImplementedError
-
-    def run(self, problem: Problem, record: Record, progress: Progress = None) -> Outcome:
-        """Take round(duration / dt) steps; see :class:`Integrator`."""
-        dt = self.spec.dt
-        n_steps = round(problem.duration_s / dt)
-        every = round(problem.sample_s / dt)
-        q, v = problem.q0.copy(), problem.v0.copy()
-        for k in range(n_steps):
-            t = k * dt
-            q, v = self.step(problem.acceleration, problem.chart, t, q, v, dt)
-            self.steps += 1
-            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-                return "diverged", f"non-finite state after step {k + 1} (t = {t + dt:.6g} s)"
-            if (k + 1) % every == 0:
-                stop = record((k + 1) * dt, q, v)
-                if stop:
-                    return stop
-            stop = _stopped(progress, (k + 1) / n_steps)
-            if stop:
-                return stop
-        return "completed", ""
-
-
-@register
-class RK4(FixedStepIntegrator):
-    """Classical Runge-Kutta 4 in local coordinates around the step's start q.
-
-    Stage i has Δq_i = c_i dt k_{i-1} and rate k_i = J(Δq_i)⁻¹ v_i (k_1 = v: J(0) = I);
-    q ← q ⊕ dt/6 (k₁ + 2k₂ + 2k₃ + k₄), v ← v + dt/6 (a₁ + 2a₂ + 2a₃ + a₄).
-    """
-
-    name = "RK4"
-
-    def step(self, f, chart, t, q, v, dt):
-        a1 = f(t, q, v)
-        d1 = v
-        q2, v2 = chart.integrate(q, 0.5 * dt * d1), v + 0.5 * dt * a1
-        a2 = f(t + 0.5 * dt, q2, v2)
-        d2 = chart.local_rate(q, 0.5 * dt * d1, v2)
-        q3, v3 = chart.integrate(q, 0.5 * dt * d2), v + 0.5 * dt * a2
-        a3 = f(t + 0.5 * dt, q3, v3)
-        d3 = chart.local_rate(q, 0.5 * dt * d2, v3)
-        q4, v4 = chart.integrate(q, dt * d3), v + dt * a3
-        a4 = f(t + dt, q4, v4)
-        d4 = chart.local_rate(q, dt * d3, v4)
-        q_new = chart.integrate(q, dt / 6.0 * (d1 + 2 * d2 + 2 * d3 + d4))
-        return q_new, v + dt / 6.0 * (a1 + 2 * a2 + 2 * a3 + a4)
-
-
-@register
-class SemiImplicitEuler(FixedStepIntegrator):
-    """Symplectic Euler: v ← v + dt a(q, v), then q ← q ⊕ dt v (first order)."""
-
-    name = "semi-implicit-euler"
-
-    def step(self, f, chart, t, q, v, dt):
-        v = v + dt * f(t, q, v)
-        return chart.integrate(q, dt * v), v
-
-
 # -- adaptive (SciPy) -------------------------------------------------------------------
 class ScipyIntegrator(Integrator):
     """A SciPy :class:`~scipy.integrate.OdeSolver` driven step by step.
@@ -360,3 +283,80 @@ RK45 = _scipy("RK45")
 DOP853 = _scipy("DOP853")
 Radau = _scipy("Radau")
 LSODA = _scipy("LSODA")
+
+
+# -- fixed step -------------------------------------------------------------------------
+class FixedStepIntegrator(Integrator):
+    """Steps of ``spec.dt``, re-anchored at every step; samples every ``sample / dt`` steps."""
+
+    fixed_step = True
+
+    def step(
+        self,
+        f: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
+        chart: LocalChart,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        dt: float,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One step from (t, q, v): the new (q, v), with q = chart.integrate(q, Δq)."""
+        raise NotImplementedError
+
+    def run(self, problem: Problem, record: Record, progress: Progress = None) -> Outcome:
+        """Take round(duration / dt) steps; see :class:`Integrator`."""
+        dt = self.spec.dt
+        n_steps = round(problem.duration_s / dt)
+        every = round(problem.sample_s / dt)
+        q, v = problem.q0.copy(), problem.v0.copy()
+        for k in range(n_steps):
+            t = k * dt
+            q, v = self.step(problem.acceleration, problem.chart, t, q, v, dt)
+            self.steps += 1
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                return "diverged", f"non-finite state after step {k + 1} (t = {t + dt:.6g} s)"
+            if (k + 1) % every == 0:
+                stop = record((k + 1) * dt, q, v)
+                if stop:
+                    return stop
+            stop = _stopped(progress, (k + 1) / n_steps)
+            if stop:
+                return stop
+        return "completed", ""
+
+
+@register
+class RK4(FixedStepIntegrator):
+    """Classical Runge-Kutta 4 in local coordinates around the step's start q.
+
+    Stage i has Δq_i = c_i dt k_{i-1} and rate k_i = J(Δq_i)⁻¹ v_i (k_1 = v: J(0) = I);
+    q ← q ⊕ dt/6 (k₁ + 2k₂ + 2k₃ + k₄), v ← v + dt/6 (a₁ + 2a₂ + 2a₃ + a₄).
+    """
+
+    name = "RK4"
+
+    def step(self, f, chart, t, q, v, dt):
+        a1 = f(t, q, v)
+        d1 = v
+        q2, v2 = chart.integrate(q, 0.5 * dt * d1), v + 0.5 * dt * a1
+        a2 = f(t + 0.5 * dt, q2, v2)
+        d2 = chart.local_rate(q, 0.5 * dt * d1, v2)
+        q3, v3 = chart.integrate(q, 0.5 * dt * d2), v + 0.5 * dt * a2
+        a3 = f(t + 0.5 * dt, q3, v3)
+        d3 = chart.local_rate(q, 0.5 * dt * d2, v3)
+        q4, v4 = chart.integrate(q, dt * d3), v + dt * a3
+        a4 = f(t + dt, q4, v4)
+        d4 = chart.local_rate(q, dt * d3, v4)
+        q_new = chart.integrate(q, dt / 6.0 * (d1 + 2 * d2 + 2 * d3 + d4))
+        return q_new, v + dt / 6.0 * (a1 + 2 * a2 + 2 * a3 + a4)
+
+
+@register
+class SemiImplicitEuler(FixedStepIntegrator):
+    """Symplectic Euler: v ← v + dt a(q, v), then q ← q ⊕ dt v (first order)."""
+
+    name = "semi-implicit-euler"
+
+    def step(self, f, chart, t, q, v, dt):
+        v = v + dt * f(t, q, v)
+        return chart.integrate(q, dt * v), v
