@@ -4,7 +4,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 
-.PHONY: setup demo test lint bench docs clean
+.PHONY: setup demo test lint bench docs clean mutation
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -37,7 +37,13 @@ survey: setup
 # Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the measured block of
 # docs/findings/accuracy-costs.md.
 bench: setup
+	$(PY) -m pip install --quiet -c constraints.txt -e '.[test,notebooks,docs,pandas]'
 	$(VENV)/bin/gimwatch bench all -o benchmarks --page docs/findings/accuracy-costs.md
+
+# Planted bugs the tests must catch (tests/mutations.py): each applied in a temporary copy of
+# the tree, its test subset run; prints caught/missed/stale per mutant. On demand, not in test.
+mutation: setup
+	$(PY) tests/mutations.py --jobs 2
 
 lint: setup
 	$(VENV)/bin/ruff check gimwatch tests

@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+from closed_forms import straight_chain_extreme_eigenvalues
 
 from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import condition_number
@@ -58,3 +59,14 @@ def test_bad_tolerance_is_refused_with_its_value():
     robot = load_robot("chain:3")
     with pytest.raises(InputError, match=r"^tol must be finite and >= 0, got -1.0$"):
         kappa_matrix_free(robot, np.zeros(3), tol=-1.0)
+
+
+def test_arpack_kappa_of_the_clustered_straight_chain_is_tight():
+    # the hard case (smallest eigenvalues within relative gaps ~1/n²), against the banded
+    # closed-form pencil of tests/closed_forms.py: measured 9e-15 at tol = 1e-10; ARPACK
+    # stopped at tol = 1e-3 is off by 7e-4
+    n = 200
+    lambda_min, lambda_max = straight_chain_extreme_eigenvalues(n)
+    result = kappa_matrix_free(load_robot(f"chain:{n}"), np.zeros(n), seed=0, tol=1e-10)
+    assert result.kappa == pytest.approx(lambda_max / lambda_min, rel=1e-12)
+    assert result.lambda_min == pytest.approx(lambda_min, rel=1e-12)

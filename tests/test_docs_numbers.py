@@ -1,0 +1,220 @@
+"""Numbers in README.md and docs/ come from a committed file or from a test's constants.
+
+Generated blocks (the bench block, the survey table, the stress table) must be what their
+generator makes of the committed files; quoted figures are looked up in the file they come
+from (benchmarks/*.csv, *.json) or in the constants of the test that checks them. A figure
+that moved or changed fails here with the page and the text it looked for: update the page,
+the file, or this test — never only one of them.
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import json
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import test_longchain
+import test_simulate
+import test_stress
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "benchmarks"
+
+
+def _text(page: str) -> str:
+    return (ROOT / page).read_text(encoding="utf-8")
+
+
+def _find(page: str, pattern: str) -> re.Match:
+    """The first match of ``pattern`` (whitespace-tolerant) in ``page``, or a clear failure."""
+    flexible = re.sub(r"(\\ )+|\s+", r"\\s+", pattern)
+    match = re.search(flexible, _text(page))
+    assert match, f"{page}: no text matching {pattern!r} (the figure moved: update this test)"
+    return match
+
+
+def _csv(name: str) -> list[dict]:
+    with (BENCH / name).open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def _figure(text: str) -> float:
+    return float(text.replace(",", "").replace("−", "-"))
+
+
+# --- generated blocks -------------------------------------------------------------------------
+
+
+def _table_rows(text: str, first_cells: set[str]) -> list[str]:
+    return [
+        line.strip()
+        for line in text.splitlines()
+        if line.startswith("| ") and line.split("|")[1].strip() in first_cells
+    ]
+
+
+def test_stress_table_in_the_docs_is_the_committed_one():
+    committed = _text("benchmarks/stress.md")
+    cases = set(test_stress.PUBLISHED_ERRORS)
+    rows = _table_rows(committed, cases)
+    assert len(rows) == len(cases)
+    assert _table_rows(_text("docs/findings/hard-cases.md"), cases) == rows
+    # and the q̈ errors the stress tests hold the code to are the committed ones
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        published = tuple(None if c == "–" else float(c) for c in cells[3:6])
+        assert published == test_stress.PUBLISHED_ERRORS[cells[0]], cells[0]
+        drift = test_stress.PUBLISHED_DRIFT.get(cells[0])
+        if drift is not None:
+            assert float(cells[8]) == drift, cells[0]
+
+
+def test_survey_block_is_generated_from_the_committed_survey(tmp_path):
+    spec = importlib.util.spec_from_file_location(
+        "update_survey_page", BENCH / "survey" / "update_readme.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    (tmp_path / "docs" / "findings").mkdir(parents=True)
+    shutil.copytree(BENCH / "survey", tmp_path / "benchmarks" / "survey")
+    page = "docs/findings/survey.md"
+    shutil.copy(ROOT / page, tmp_path / page)
+    assert module.main(tmp_path) == 0
+    assert (tmp_path / page).read_text() == _text(page), "run `make survey` or its update step"
+
+
+def test_bench_block_comes_from_the_committed_bench_run():
+    env = json.loads((BENCH / "summary.json").read_text())["environment"]
+    header = _find("docs/findings/accuracy-costs.md", r"Measured by `make bench` \(([^;]+);")
+    assert header.group(1) == env["date"]
+    block = _text("docs/findings/accuracy-costs.md")
+    for name in ("pinocchio", "numpy", "scipy"):
+        assert f"{env[name]}" in block.split("<!-- bench:end -->")[0], name
+
+
+# --- quoted figures ---------------------------------------------------------------------------
+
+
+def _kappa_over_4n4(n: int) -> float:
+    rows = [r for r in _csv("longchain_kappa.csv") if r["route"] == "matrix_free_lanczos"]
+    (row,) = [r for r in rows if int(r["n"]) == n]
+    return float(row["kappa_over_4n4"])
+
+
+def test_long_chain_kappa_figures_are_the_committed_ones():
+    # n = 100 and 1,000 from the bench CSV; 10,000 is not in it: the value the Lanczos test
+    # checks against the banded closed form (tests/test_longchain.py)
+    expected = [round(_kappa_over_4n4(n), 3) for n in (100, 1_000)]
+    expected.append(test_longchain.PUBLISHED_KAPPA_OVER_4N4[10_000])
+    assert expected[1] == test_longchain.PUBLISHED_KAPPA_OVER_4N4[1_000]
+    claims = _find(
+        "docs/findings/claims.md",
+        r"down to ([\d.]+) \(n = 100\), ([\d.]+) \(1,000\) and ([\d.]+)",
+    )
+    assert [float(x) for x in claims.groups()] == expected
+    long_chains = _find(
+        "docs/findings/long-chains.md",
+        r"straight chain is ([\d.]+), ([\d.]+), ([\d.]+) at n = 100, 1,000, 10,000",
+    )
+    assert [float(x) for x in long_chains.groups()] == expected
+    readme = _find("README.md", r"… ([\d.]+) \(n = 10,000\)")
+    assert float(readme.group(1)) == round(expected[2], 2)
+
+
+def _numbers(match: re.Match) -> list[float]:
+    return [float(x) for x in match.groups()]
+
+
+def test_simulation_figures_are_the_ones_the_tests_check():
+    demo = test_simulate.PUBLISHED_DEMO
+    sizes = (4, 10, 20)
+
+    def column(name):
+        return [demo[n][name] for n in sizes]
+
+    page = "docs/guide/simulate.md"
+    number = r"(\d+(?:\.\d+)?(?:e-\d+)?)"
+    three = rf"{number}, {number},\s+{number}"
+    assert _numbers(_find(page, rf"relative energy drift {three} \(n = 4, 10, 20\)")) == column(
+        "drift"
+    )
+    assert _numbers(_find(page, rf"worst κ / 4n⁴ = {three}")) == column("worst")
+    assert _numbers(_find(page, rf"Pearson\(log δ, log κ\) = {three}")) == column("pearson")
+    estimator = _numbers(_find(page, rf"median \|αδ − κ\|/κ = {three} and max {three}"))
+    assert estimator == column("median") + column("max")
+    claims = "docs/findings/claims.md"
+    assert _numbers(_find(claims, rf"κ/4n⁴ = {three} for n = 4, 10, 20")) == column("worst")
+    assert _numbers(_find(claims, rf"Pearson\(log δ, log κ\) = {three}")) == column("pearson")
+    assert _numbers(
+        _find(claims, rf"median\s+\|αδ − κ\|/κ is {number} \(max {number}\) for the swinging")
+    ) == [demo[4]["median"], demo[4]["max"]]
+    readme = _numbers(_find("README.md", rf"median error {number} % \(20 links\) to {number} %"))
+    assert readme == [100 * demo[20]["median"], 100 * demo[4]["median"]]
+    orders = _find(page, r"RK4 (\d+\.\d+)–(\d+\.\d+),\s+semi-implicit Euler (\d+\.\d+)")
+    published = test_simulate.PUBLISHED_ORDERS
+    rk4, euler = published["RK4"], published["semi-implicit-euler"]
+    assert (float(orders.group(1)), float(orders.group(2))) == rk4
+    assert float(orders.group(3)) == euler[0] == euler[1]
+
+
+def test_watch_cost_figures_are_the_committed_ones():
+    rows = {r["watch"]: r for r in _csv("watch.csv") if r["n"] == "20"}
+    match = _find(
+        "docs/guide/simulate.md",
+        r"δ costs about (\d+) µs per sample, ([\d.]+) % of a bare step amortized \(κ: ([\d.]+) %",
+    )
+    sample_us, delta_percent, kappa_percent = (float(x) for x in match.groups())
+    assert sample_us == round(float(rows["delta"]["sample_us"]))
+    assert delta_percent == round(100 * float(rows["delta"]["amortized"]), 1)
+    assert kappa_percent == round(100 * float(rows["kappa_eig"]["amortized"]))
+
+
+def test_survey_figures_are_the_committed_ones():
+    survey = json.loads((BENCH / "survey" / "survey.json").read_text())
+    robots = {r["robot"]: r for r in survey["robots"]}
+    page = "docs/findings/survey.md"
+    wall = _find(page, r"took (\d+) s wall on this 2-core machine \((\d+) runs, (\d+) completed")
+    runs = sum(r["trajectories"]["runs"] for r in survey["robots"])
+    completed = sum(r["trajectories"]["completed"] for r in survey["robots"])
+    assert [int(x) for x in wall.groups()] == [round(survey["wall_time_s"]), runs, completed]
+    kinova = _find(page, r"Kinova's zero pose has κ/δ = ([\d.]+) against a median of ([\d.]+)")
+    alphas = [r["alpha"] for r in survey["robots"] if r["alpha"] is not None]
+    assert float(kinova.group(1)) == round(robots["kinova"]["alpha"])
+    assert float(kinova.group(2)) == round(float(np.median(alphas)), 1)
+
+
+def test_long_chain_simulation_figures_are_the_committed_run():
+    summary = json.loads((BENCH / "chain_1000" / "summary.json").read_text())
+    match = _find(
+        "docs/findings/long-chains.md",
+        r"1,000-link swinging chain in ([\d.]+) s wall: ([\d,]+) steps, ([\d,]+) right-hand sides, "
+        r"relative energy\s+drift ([\d.e-]+)",
+    )
+    wall, steps, rhs, drift = (_figure(x) for x in match.groups())
+    assert wall == pytest.approx(summary["wall_time_s"], abs=0.05)
+    assert steps == summary["steps"] and rhs == summary["rhs_evaluations"]
+    assert drift == pytest.approx(summary["energy_drift_relative"], rel=0.05)
+
+
+def test_dependency_lower_bounds_are_the_pinned_tested_versions():
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    pins = {}
+    for line in (ROOT / "constraints.txt").read_text().splitlines():
+        if line and not line.startswith("#"):
+            name, version = line.split("==")
+            pins[name.lower().replace("_", "-")] = version
+    requirements = list(project["dependencies"])
+    for extra in project["optional-dependencies"].values():
+        requirements += extra
+    for requirement in requirements:
+        match = re.fullmatch(r"([A-Za-z0-9_.-]+)(\[[a-z,]+\])?>=([\w.]+)", requirement)
+        assert match, f"{requirement}: expected name>=version"
+        name = match.group(1).lower().replace("_", "-")
+        assert pins.get(name) == match.group(3), (requirement, pins.get(name))
