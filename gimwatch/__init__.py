@@ -1,58 +1,130 @@
 """gimwatch: watch the conditioning of a robot's generalized inertia matrix (GIM).
 
-Importing gimwatch does no work: no robot is loaded and nothing is written.
+Importing gimwatch does no work: no robot is loaded, nothing is written, and no submodule is
+imported until one of its names is first used (PEP 562). ``gimwatch.load_robot`` imports
+``gimwatch.model.robots`` on first access; every name of :data:`__all__` is reachable this
+way, and ``from gimwatch import X`` works as usual.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from gimwatch._version import __version__
-from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
-from gimwatch.denoc import DenocModel
-from gimwatch.errors import (
-    ConditioningError,
-    GimwatchError,
-    IllConditionedWarning,
-    InputError,
-    RobotError,
-    SceneError,
-    SimulationError,
-    URDFError,
-)
-from gimwatch.metrics.conditioning import (
-    ScaledDiagonalRatio,
-    check_gim,
-    condition_estimate_1norm,
-    condition_number,
-    diagonal_ratio,
-    eigenvalues,
-    ldlt_pivots,
-    pivot_ratio_backward,
-    pivot_ratio_forward,
-    udut_pivots,
-)
-from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
-from gimwatch.metrics.matrix_free import (
-    MatrixFreeKappa,
-    gim_inverse_operator,
-    gim_operator,
-    kappa_matrix_free,
-)
-from gimwatch.metrics.watch import Watch, estimator_quality
-from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
-from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.robots import (
-    Robot,
-    example_robot_names,
-    load_robot,
-    neutral_configuration,
-    random_configurations,
-)
-from gimwatch.simulation.results_folder import summarize, write_simulation
-from gimwatch.simulation.scene import Scene, load_scene, parse_scene
-from gimwatch.simulation.simulate import Simulation, Trajectory, run_scene
-from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
-from gimwatch.stress.reference_tree import TreeReference
-from gimwatch.stress.suite import StressResult, run_stress
-from gimwatch.survey.report import write_survey
-from gimwatch.survey.run import RobotFailure, RobotSurvey, SurveyResult, run_survey
+
+if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports
+    from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
+    from gimwatch.denoc import DenocModel
+    from gimwatch.errors import (
+        ConditioningError,
+        GimwatchError,
+        IllConditionedWarning,
+        InputError,
+        RobotError,
+        SceneError,
+        SimulationError,
+        URDFError,
+    )
+    from gimwatch.metrics.conditioning import (
+        ScaledDiagonalRatio,
+        check_gim,
+        condition_estimate_1norm,
+        condition_number,
+        diagonal_ratio,
+        eigenvalues,
+        ldlt_pivots,
+        pivot_ratio_backward,
+        pivot_ratio_forward,
+        udut_pivots,
+    )
+    from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
+    from gimwatch.metrics.matrix_free import (
+        MatrixFreeKappa,
+        gim_inverse_operator,
+        gim_operator,
+        kappa_matrix_free,
+    )
+    from gimwatch.metrics.watch import Watch, estimator_quality
+    from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
+    from gimwatch.model.inertia import gim, gim_diagonal
+    from gimwatch.model.robots import (
+        Robot,
+        example_robot_names,
+        load_robot,
+        neutral_configuration,
+        random_configurations,
+    )
+    from gimwatch.simulation.results_folder import summarize, write_simulation
+    from gimwatch.simulation.scene import Scene, load_scene, parse_scene
+    from gimwatch.simulation.simulate import Simulation, Trajectory, run_scene
+    from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
+    from gimwatch.stress.reference_tree import TreeReference
+    from gimwatch.stress.suite import StressResult, run_stress
+    from gimwatch.survey.report import write_survey
+    from gimwatch.survey.run import RobotFailure, RobotSurvey, SurveyResult, run_survey
+
+#: Public name -> the module that defines it (imported on first access).
+_EXPORTS: dict[str, str] = {
+    "ChainSpec": "gimwatch.model.chains",
+    "ConditioningError": "gimwatch.errors",
+    "CrossCheckResult": "gimwatch.crosscheck",
+    "DenocModel": "gimwatch.denoc",
+    "GimAnalysis": "gimwatch.metrics.dense_analysis",
+    "GimwatchError": "gimwatch.errors",
+    "IllConditionedWarning": "gimwatch.errors",
+    "InputError": "gimwatch.errors",
+    "MatrixFreeKappa": "gimwatch.metrics.matrix_free",
+    "PlanarChainReference": "gimwatch.stress.reference_planar",
+    "Robot": "gimwatch.model.robots",
+    "RobotError": "gimwatch.errors",
+    "RobotFailure": "gimwatch.survey.run",
+    "RobotSurvey": "gimwatch.survey.run",
+    "ScaledDiagonalRatio": "gimwatch.metrics.conditioning",
+    "Scene": "gimwatch.simulation.scene",
+    "SceneError": "gimwatch.errors",
+    "Simulation": "gimwatch.simulation.simulate",
+    "SimulationError": "gimwatch.errors",
+    "StressResult": "gimwatch.stress.suite",
+    "SurveyResult": "gimwatch.survey.run",
+    "Trajectory": "gimwatch.simulation.simulate",
+    "TreeReference": "gimwatch.stress.reference_tree",
+    "URDFError": "gimwatch.errors",
+    "Watch": "gimwatch.metrics.watch",
+    "analyze_configuration": "gimwatch.metrics.dense_analysis",
+    "chain_spec": "gimwatch.model.chains",
+    "check_gim": "gimwatch.metrics.conditioning",
+    "condition_estimate_1norm": "gimwatch.metrics.conditioning",
+    "condition_number": "gimwatch.metrics.conditioning",
+    "crosscheck_robot": "gimwatch.crosscheck",
+    "diagonal_ratio": "gimwatch.metrics.conditioning",
+    "eigenvalues": "gimwatch.metrics.conditioning",
+    "estimator_quality": "gimwatch.metrics.watch",
+    "example_robot_names": "gimwatch.model.robots",
+    "generate_chain_urdf": "gimwatch.model.chains",
+    "gim": "gimwatch.model.inertia",
+    "gim_diagonal": "gimwatch.model.inertia",
+    "gim_inverse_operator": "gimwatch.metrics.matrix_free",
+    "gim_operator": "gimwatch.metrics.matrix_free",
+    "kappa_matrix_free": "gimwatch.metrics.matrix_free",
+    "ldlt_pivots": "gimwatch.metrics.conditioning",
+    "load_robot": "gimwatch.model.robots",
+    "load_scene": "gimwatch.simulation.scene",
+    "neutral_configuration": "gimwatch.model.robots",
+    "parse_scene": "gimwatch.simulation.scene",
+    "pivot_ratio_backward": "gimwatch.metrics.conditioning",
+    "pivot_ratio_forward": "gimwatch.metrics.conditioning",
+    "planar_reference": "gimwatch.stress.reference_planar",
+    "random_configurations": "gimwatch.model.robots",
+    "run_scene": "gimwatch.simulation.simulate",
+    "run_stress": "gimwatch.stress.suite",
+    "run_survey": "gimwatch.survey.run",
+    "summarize": "gimwatch.simulation.results_folder",
+    "udut_pivots": "gimwatch.metrics.conditioning",
+    "write_chain_urdf": "gimwatch.model.chains",
+    "write_simulation": "gimwatch.simulation.results_folder",
+    "write_survey": "gimwatch.survey.report",
+}
 
 __all__ = [
     "ChainSpec",
@@ -115,3 +187,17 @@ __all__ = [
     "write_simulation",
     "write_survey",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import the module defining ``name`` on first access and cache the name (PEP 562)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'gimwatch' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -36,7 +36,11 @@ IGNORED = (".git", ".venv", "site", "demo-output", ".pytest_cache", "__pycache__
 
 @dataclass(frozen=True)
 class Mutant:
-    """One planted bug: replace ``old`` by ``new`` in ``path``; ``tests`` should catch it."""
+    """One planted bug: replace ``old`` by ``new`` in ``path``; ``tests`` should catch it.
+
+    ``path`` may list alternatives separated by ``|`` (where the code lives before and after a
+    move); the patch goes to the first that holds ``old`` exactly once.
+    """
 
     id: str
     path: str
@@ -44,6 +48,11 @@ class Mutant:
     new: str
     tests: tuple[str, ...]
     why: str = ""
+
+    @property
+    def paths(self) -> tuple[str, ...]:
+        """The candidate files, in order."""
+        return tuple(self.path.split("|"))
 
 
 DENOC = ("tests/test_denoc.py",)
@@ -147,8 +156,8 @@ MUTANTS = (
         "gimwatch/stress/reference_tree.py",
         "REFERENCE_DIGITS = 50",
         "REFERENCE_DIGITS = 15",
-        STRESS_QUICK,
-        "the tree reference at 15 digits (the stress suite's own tests must notice)",
+        ("tests/test_reference_precision.py", "tests/test_stress.py", "-m", "not slow"),
+        "the tree reference at 15 digits (its default precision is the stress suite's)",
     ),
     Mutant(
         "planar-reference-own-inertia",
@@ -218,7 +227,7 @@ MUTANTS = (
     # --- energy and drift ---
     Mutant(
         "drift-always-zero",
-        "gimwatch/simulation/simulate.py",
+        "gimwatch/simulation/simulate.py|gimwatch/simulation/trajectory.py",
         "deviation = float(np.max(np.abs(self.energy - self.energy[0])))",
         "deviation = 0.0 * float(np.max(np.abs(self.energy - self.energy[0])))",
         ("tests/test_simulate.py", "-k", "swinging"),
@@ -239,6 +248,14 @@ MUTANTS = (
         "kinetic = 0.5 * float(velocity @ state.matvec(velocity)) * (1 + 1e-9)",
         LONG,
         "DeNOC kinetic energy off by 1e-9 relative",
+    ),
+    Mutant(
+        "rk4-third-stage",
+        "gimwatch/simulation/simulate.py|gimwatch/simulation/integrators.py",
+        "v + 0.5 * dt * a2",
+        "v + 0.5 * dt * a1",
+        ("tests/test_simulate.py", "-k", "converge"),
+        "RK4's third stage from the first slope (order drops)",
     ),
     # --- Lanczos ---
     Mutant(
@@ -339,26 +356,28 @@ def _run_tests(tree: Path, tests: tuple[str, ...], timeout: float) -> tuple[str,
     return f"error (pytest exit {result.returncode})", elapsed
 
 
-def _apply(tree: Path, mutant: Mutant) -> str | None:
-    """Patch the copy; the original text, or None when the patch is stale."""
-    path = tree / mutant.path
-    if not path.exists():
-        return None
-    text = path.read_text()
-    if text.count(mutant.old) != 1:
-        return None
-    path.write_text(text.replace(mutant.old, mutant.new))
-    return text
+def _apply(tree: Path, mutant: Mutant) -> tuple[Path, str] | None:
+    """Patch the copy: (the file, its original text), or None when the patch is stale."""
+    for candidate in mutant.paths:
+        path = tree / candidate
+        if not path.exists():
+            continue
+        text = path.read_text()
+        if text.count(mutant.old) == 1:
+            path.write_text(text.replace(mutant.old, mutant.new))
+            return path, text
+    return None
 
 
 def _run_mutant(tree: Path, mutant: Mutant, timeout: float) -> tuple[str, float]:
-    original = _apply(tree, mutant)
-    if original is None:
+    applied = _apply(tree, mutant)
+    if applied is None:
         return "stale", 0.0
+    path, original = applied
     try:
         outcome, elapsed = _run_tests(tree, mutant.tests, timeout)
     finally:
-        (tree / mutant.path).write_text(original)
+        path.write_text(original)
     status = {"failed": "caught", "passed": "MISSED", "timeout": "timeout"}.get(outcome, outcome)
     return status, elapsed
 
@@ -376,7 +395,7 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit("duplicate mutant ids")
     if args.list:
         for m in MUTANTS:
-            print(f"{m.id:34} {m.path:40} {m.why}")
+            print(f"{m.id:34} {m.paths[0]:40} {m.why}")
         return 0
     unknown = [i for i in args.ids if i not in known]
     if unknown:
@@ -388,12 +407,16 @@ def main(argv: list[str] | None = None) -> int:
         trees = [_copy_tree(Path(scratch) / f"tree{k}") for k in range(jobs)]
         subsets = sorted({m.tests for m in selected})
         print(f"baseline: {len(subsets)} test subsets on the unmutated copy", file=sys.stderr)
-        for tests in subsets:
-            outcome, elapsed = _run_tests(trees[0], tests, args.timeout)
-            if outcome != "passed":
-                print(f"baseline {' '.join(tests)}: {outcome}; fix the tests first")
-                return 1
-            print(f"  {' '.join(tests)}: passed in {elapsed:.0f} s", file=sys.stderr)
+        with ThreadPoolExecutor(jobs) as pool:
+            outcomes = pool.map(
+                lambda k: _run_tests(trees[k % jobs], subsets[k], args.timeout),
+                range(len(subsets)),
+            )
+            for tests, (outcome, elapsed) in zip(subsets, outcomes, strict=True):
+                print(f"  {' '.join(tests)}: {outcome} in {elapsed:.0f} s", file=sys.stderr)
+                if outcome != "passed":
+                    print(f"baseline {' '.join(tests)}: {outcome}; fix the tests first")
+                    return 1
         queue = list(enumerate(selected))
         results: dict[int, tuple[str, float]] = {}
 
@@ -412,7 +435,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{'mutant':34} {'file':40} {'status':8} {'s':>5}")
     for index, mutant in enumerate(selected):
         status, elapsed = results[index]
-        print(f"{mutant.id:34} {mutant.path:40} {status:8} {elapsed:5.0f}")
+        print(f"{mutant.id:34} {mutant.paths[0]:40} {status:8} {elapsed:5.0f}")
     caught = sum(results[i][0] == "caught" for i in results)
     print(f"caught {caught}/{len(selected)} ({100.0 * caught / len(selected):.0f} %)")
     return 0 if caught == len(selected) else 1

@@ -380,7 +380,7 @@ BAD_ARGUMENTS = [
     (["analyze", "nope"], "robot 'nope': not chain:N"),
     (["analyze"], "the following arguments are required: robot"),
     ([], "the following arguments are required: command"),
-    (["frobnicate"], "argument command: invalid choice: 'frobnicate'"),
+    (["frobnicate"], "unknown command 'frobnicate'"),
     (["analyze", "chain:2", "--bogus"], "unrecognized arguments: --bogus"),
     (["demo", "-o", "{tmp}/good.json"], "good.json: is a file, not a folder"),
     (["crosscheck", "chain:2", "--samples", "-1"], "argument --samples: must be a positive"),

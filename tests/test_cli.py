@@ -113,7 +113,8 @@ def test_analyze_every_example_robot(capsys, name, floating):
             ["analyze", "ur5", "--q", "1", "--random", "2"],
             "--q and --random must be used one at a time",
         ),
-        (["frobnicate"], "argument command: invalid choice: 'frobnicate'"),
+        (["frobnicate"], "gimwatch: error: unknown command 'frobnicate' (commands: chain,"),
+        (["analyse", "ur5"], "unknown command 'analyse'; did you mean 'analyze'?"),
     ],
 )
 def test_bad_arguments_give_one_line_and_exit_2(capsys, argv, message):
@@ -124,14 +125,15 @@ def test_bad_arguments_give_one_line_and_exit_2(capsys, argv, message):
 
 
 def test_demo_writes_report(capsys, tmp_path):
-    code, out, _ = run(capsys, "demo", "-o", str(tmp_path), "--duration", "0.5", "--no-gif")
+    code, out, _ = run(capsys, "demo", "-o", str(tmp_path), "--duration", "0.5")
     assert code == 0
     assert (tmp_path / "report.md").exists() and "| 20 |" in out
+    assert not list(tmp_path.glob("*.gif"))  # the animation is opt-in (--gif)
 
 
 def test_crosscheck_command_json_and_exit_codes(capsys):
     code, out, err = run(capsys, "crosscheck", "ur5", "chain:3", "--samples", "2", "--json")
-    records = json.loads(out)
+    records = json.loads(out)["robots"]
     assert code == 0 and [r["robot"] for r in records] == ["ur5", "chain_3"]
     for key in ("nv", "samples", "gim_rel_err", "tau_rel_err", "qdd_rel_err", "pivots_rel_err"):
         assert key in records[0]

@@ -94,3 +94,55 @@ def test_python_blocks_run(page, tmp_path, monkeypatch):
         exec(code, namespace)
         ran += 1
     assert ran, f"{page}: every python block is marked no-run"
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "notebooks").glob("*.ipynb")), ids=lambda p: p.name)
+def test_notebooks_are_stored_with_their_outputs(path):
+    """The docs render notebooks as stored (no execution at build time): outputs must be there."""
+    import json
+
+    cells = [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"]
+    assert cells and all(c["execution_count"] is not None for c in cells), "run and save it"
+    outputs = [o for c in cells for o in c["outputs"]]
+    assert outputs and not [o for o in outputs if o["output_type"] == "error"]
+    source = "".join("".join(c["source"]) for c in cells)
+    if "plt." in source:  # a figure is an image, not "<Figure size ...>" text (no Agg)
+        assert any("image/png" in o.get("data", {}) for o in outputs), path.name
+    assert 'matplotlib.use("Agg")' not in source
+
+
+def test_stated_times_are_the_measured_ones():
+    """Times on the front pages come from benchmarks/startup.csv and newcomer/times.json."""
+    import csv
+    import json
+
+    with (ROOT / "benchmarks" / "startup.csv").open(newline="") as handle:
+        startup = {row["case"]: float(row["median_s"]) for row in csv.DictReader(handle)}
+    newcomer = json.loads((ROOT / "benchmarks" / "newcomer" / "times.json").read_text())
+
+    def flat(page: str) -> str:
+        return " ".join((ROOT / page).read_text(encoding="utf-8").split())
+
+    started = flat("docs/getting-started.md")
+    ratio = startup["gimwatch analyze ur5"] / startup["bare ur5 (pinocchio crba + eigvalsh)"]
+    for text in (
+        f"`import gimwatch` takes {startup['import gimwatch']:.2f} s against "
+        f"{startup['import pinocchio']:.2f} s",
+        f"SciPy and numba: {startup['import gimwatch + first names']:.2f} s",
+        f"`gimwatch analyze ur5` takes {startup['gimwatch analyze ur5']:.2f} s, {ratio:.2f}x",
+        f"`gimwatch demo` takes {startup['gimwatch demo']:.1f} s",
+    ):
+        assert text in started, text
+    assert f"({startup['gimwatch demo']:.1f} s on a 2-core machine" in flat(
+        "docs/guide/simulate.md"
+    )
+    readme = flat("README.md")
+    for text in (
+        f"`pip install .` {newcomer['pip_install_s']:.0f} s",
+        f"`gimwatch analyze ur5` {newcomer['analyze_ur5_s']:.2f} s",
+        f"the Python above {newcomer['readme_python_snippet_s']:.1f} s",
+        f"`gimwatch simulate scenes/chain_10.toml` {newcomer['simulate_chain_10_s']:.1f} s",
+        f"`gimwatch demo` {newcomer['demo_s']:.0f} s",
+    ):
+        assert text in readme, text
+    assert newcomer["install_analysis_and_simulation_s"] < 120  # "under 2 minutes"

@@ -218,3 +218,91 @@ def test_dependency_lower_bounds_are_the_pinned_tested_versions():
         assert match, f"{requirement}: expected name>=version"
         name = match.group(1).lower().replace("_", "-")
         assert pins.get(name) == match.group(3), (requirement, pins.get(name))
+
+
+def test_survey_headlines_are_the_committed_survey():
+    survey = json.loads((BENCH / "survey" / "survey.json").read_text())
+    robots = survey["robots"]
+    pearson = [r["pearson_log_delta_log_kappa"] for r in robots]
+    pearson = [x for x in pearson if x is not None and np.isfinite(x)]
+    below = sum(x < 0.5 for x in pearson)
+    readme = _find("README.md", r"\((\d+) of (\d+) below 0\.5\)")
+    assert [int(x) for x in readme.groups()] == [below, len(pearson)]
+    assert int(_find("README.md", r"on the paper's chains and on (\d+) real robots").group(1)) == (
+        len(robots)
+    )
+    claims = "docs/findings/claims.md"
+    match = _find(
+        claims,
+        r"Across random configurations of (\d+) real robots the median Pearson\s+correlation is "
+        r"([\d.]+) \((\d+) above 0\.9\), but (\d+) branched robots",
+    )
+    assert _numbers(match) == [
+        len(pearson),
+        round(float(np.median(pearson)), 2),
+        sum(x > 0.9 for x in pearson),
+        below,
+    ]
+    errors = [r["alpha_delta_rel_error_median"] for r in robots]
+    errors = [x for x in errors if x is not None and np.isfinite(x)]
+    match = _find(
+        claims,
+        r"median error\s+is ([\d.]+) \(median over robots\), but (\d+) of (\d+) robots have median "
+        r"errors above 100 %",
+    )
+    assert _numbers(match) == [
+        round(float(np.median(errors)), 2),
+        sum(x > 1 for x in errors),
+        len(robots),
+    ]
+
+
+def test_cost_and_long_chain_tables_are_the_committed_runs():
+    summary = json.loads((BENCH / "summary.json").read_text())
+    speedup = summary["sections"]["conditioning"]["speedup_delta_on_vs_kappa_eig"]
+    match = _find(
+        "docs/findings/claims.md",
+        r"The O\(n\) diagonal costs (\d+)× less than κ at n = 200 and (\d+)× less at n = 500",
+    )
+    assert _numbers(match) == [round(speedup["200"]), round(speedup["500"])]
+    page = _text("docs/findings/long-chains.md")
+    for row in _csv("longchain_analyze.csv"):
+        n = int(row["n"])
+        pattern = (
+            rf"\| {n:,} \| [^|]+ \| {float(row['wall_s']):.1f} \| "
+            rf"{round(float(row['peak_rss_mb']))} \|"
+        )
+        assert re.search(pattern, page), f"long-chains.md: no row {pattern!r}"
+
+
+def test_crosscheck_table_is_the_committed_run():
+    runs = {
+        base: json.loads((BENCH / "crosscheck" / f"{base}.json").read_text())
+        for base in ("fixed", "floating")
+    }
+    page = "docs/guide/crosscheck.md"
+    counts = _find(page, r"(\d+) fixed-base and (\d+) floating-base robots, all passed")
+    assert _numbers(counts) == [len(runs["fixed"]), len(runs["floating"])]
+    assert all(r["passed"] for rows in runs.values() for r in rows)
+
+    def worst(base, key):
+        values = [r[key] for r in runs[base] if r[key] is not None]
+        return f"{max(values):.2g}"
+
+    rows = {
+        r"\| GIM \| `crba` \|": "gim_rel_err",
+        r"\| diag GIM, O\(n\) \| diag `crba` \|": "gim_diagonal_rel_err",
+        r"\| τ \| `rnea` \|": "tau_rel_err",
+        r"\| q̈ backward error [^|]+ \| `aba` \|": "qdd_backward_err",
+        r"\| UDUᵀ pivots \| `cholesky.decompose` D \|": "pivots_rel_err",
+    }
+    for label, key in rows.items():
+        match = _find(page, label + r" ([\d.e+-]+) \| ([\d.e+-]+) \|")
+        assert list(match.groups()) == [worst("fixed", key), worst("floating", key)], key
+    forward = _find(page, r"\| q̈ forward error \| `aba` \| ([\d.e-]+) \((\w+), κ = ([\d.e+]+)\)")
+    value, robot, kappa = max(
+        (r["qdd_rel_err"], r["robot"], r["kappa_max"])
+        for r in runs["fixed"]
+        if r["qdd_rel_err"] is not None
+    )
+    assert forward.groups() == (f"{value:.2g}", robot, f"{kappa:.2g}".replace("+0", ""))

@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+from closed_forms import straight_chain_extreme_eigenvalues
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, planar_rod_chain_gim
 
 from gimwatch.metrics.conditioning import condition_number, diagonal_ratio
@@ -36,11 +37,19 @@ def test_straight_chain_diagonal_ratio_is_n_cubed(n):
     )
 
 
+#: κ/4n⁴ of the straight chain as published (docs/findings/claims.md).
+PUBLISHED_KAPPA_OVER_4N4 = {10: 1.088, 20: 1.047}
+
+
 @pytest.mark.parametrize("n", [10, 20, 50])
 def test_straight_chain_condition_number_near_4n4(n):
     robot = load_robot(f"chain:{n}")
     kappa = condition_number(gim(robot, neutral_configuration(robot)))
-    assert kappa == pytest.approx(4 * n**4, rel=0.10)
+    # against the banded closed form (tests/closed_forms.py); eigvalsh's λmin: ~eps·κ relative
+    lambda_min, lambda_max = straight_chain_extreme_eigenvalues(n)
+    assert kappa == pytest.approx(lambda_max / lambda_min, rel=1e-8)
+    if n in PUBLISHED_KAPPA_OVER_4N4:
+        assert round(kappa / (4 * n**4), 3) == PUBLISHED_KAPPA_OVER_4N4[n]
 
 
 @pytest.mark.parametrize("spec", ["chain:1", "chain:7", "chain:60"])

@@ -191,7 +191,7 @@ def test_stress_command_prints_the_table_and_json(capsys):
     assert out.splitlines()[0].split()[:3] == ["case", "nv", "kappa"]
     assert "ur5-wrist-aligned" in out and "panda-zero" in out
     assert main(["stress", "talos-arm-zero", "--no-simulate", "--json"]) == 0
-    record = json.loads(capsys.readouterr().out)[0]
+    (record,) = json.loads(capsys.readouterr().out)["cases"]
     assert record["case"] == "talos-arm-zero" and record["passed"] is True
     assert set(record["errors"]) == set(METHODS)
 

@@ -81,6 +81,10 @@ def counters(monkeypatch):
         wrap(numpy.linalg, name, "eig")
     wrap(pin, "crba", "crba")
     wrap(pin, "computeCentroidalMap", "diag")
+    from gimwatch.denoc.lean import LeanModel
+
+    wrap(LeanModel, "gim_diagonal", "diag")  # the watch's compiled O(n) diagonal
+    wrap(LeanModel, "diagonal_ratio", "diag")  # … and δ from it in the same call
     return counts
 
 
@@ -146,4 +150,5 @@ def test_kappa_lanczos_tracks_the_closed_form_kappa_without_forming_m(counters):
     assert counters == {"eig": 0, "crba": 0, "diag": 0}  # matrix-free: no M, no dense solve
     for q, value in zip(run.q, run.watch["watch_kappa_lanczos"], strict=True):
         lam = np.linalg.eigvalsh(planar_rod_chain_gim(q, 2.2, 1.0))
-        assert value == pytest.approx(lam[-1] / lam[0], rel=1e-2)
+        # ARPACK at TOL = 1e-3 on each eigenvalue: κ within 2e-3 (measured 1e-13 here)
+        assert value == pytest.approx(lam[-1] / lam[0], rel=2e-3)

@@ -102,6 +102,7 @@ class Section:
 SECTIONS: dict[str, Section] = {
     s.name: s
     for s in (
+        Section("startup", "Startup and first contact", "gimwatch.bench.startup"),
         Section("conditioning", "Conditioning cost vs n", "gimwatch.bench.conditioning_cost"),
         Section("estimators", "Estimator quality vs cost", "gimwatch.bench.estimators"),
         Section("accuracy", "Forward-dynamics accuracy vs κ", "gimwatch.bench.accuracy"),
@@ -127,6 +128,13 @@ SECTIONS: dict[str, Section] = {
             "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
         ),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),
+        Section("lean", "δ at the cost of its arithmetic", "gimwatch.bench.lean_cost"),
+        Section(
+            "tracker",
+            "κ tracked at O(n) per sample",
+            "gimwatch.bench.tracker_cost",
+            ("gimwatch.simulation.simulate",),
+        ),
         Section(
             "tighten",
             "Tightening the tolerance on alarm",

@@ -1,9 +1,11 @@
-"""Section ``denoc``: what gimwatch's DeNOC (NumPy) costs against Pinocchio (C++).
+"""Section ``denoc``: what gimwatch's DeNOC (compiled) costs against Pinocchio (C++).
 
-For each chain size n (the paper's rod chains ``chain:n``, one seeded random state) it times
+For each chain size n (the paper's rod chains ``chain:n``, fixed, and the same chain on a
+free-flyer with a rod as its base body; one seeded random state) it times
 the GIM (DeNOC Eqs. 11–13 vs ``pinocchio.crba``), its O(n) diagonal (no Pinocchio
 counterpart: ``gimwatch.model.inertia.gim_diagonal`` is listed for scale), inverse dynamics (vs
-``rnea``) and forward dynamics (Saha's UDUᵀ recursion vs ``aba``): median time per call
+``rnea``) and forward dynamics (Saha's UDUᵀ recursion vs ``aba``; through the checked
+``DenocModel`` API and through ``DenocModel.lean()``, one compiled call): median time per call
 (:func:`gimwatch.bench.timing.time_call`) and the ratio DeNOC / Pinocchio.
 
 Pinocchio's Data grows as nv³; above nv = 400 it is built only when it fits in half the
@@ -14,16 +16,21 @@ size, else Pinocchio is not timed at that size and the row says so.
 from __future__ import annotations
 
 import gc
+import shutil
+import tempfile
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from threadpoolctl import threadpool_limits
 
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import plot_denoc_cost
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits, time_call
 from gimwatch.crosscheck import denoc_model
+from gimwatch.model.chains import chain_spec, generate_chain_urdf
 from gimwatch.model.inertia import gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
 
@@ -34,9 +41,43 @@ QUICK_SIZES = (4,)
 COLUMNS = ("n", "quantity", "denoc_us", "pinocchio_us", "ratio", "note")
 
 
+_GRAVITY = np.array([0.0, 0.0, -9.81])  # Pinocchio's default, as in the models timed here
+#: A 2.2 kg, 1 m rod as the floating chain's base body (the generated chain's is massless,
+#: which leaves M singular on a free-flyer: the base could spin about joint 1's axis for free).
+_BASE_INERTIAL = (
+    '<link name="base_link"><inertial><origin xyz="0.5 0 0"/><mass value="2.2"/>'
+    '<inertia ixx="0.0011" iyy="0.18" izz="0.18" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+)
+
+
+def floating_chain(n: int, folder: Path):
+    """The paper's n-rod chain on a free-flyer, its base a rod too (URDF written to folder)."""
+    xml = generate_chain_urdf(chain_spec(n)).replace('<link name="base_link"/>', _BASE_INERTIAL)
+    path = folder / f"floating_chain_{n}.urdf"
+    path.write_text(xml, encoding="utf-8")
+    return load_robot(path, floating=True)
+
+
+def _lean_case(dm, robot, data, q, v, tau) -> tuple[Callable, Callable]:
+    """The lean call (one compiled call, preallocated output) and Pinocchio's ABA."""
+    lean, out, model = dm.lean(), np.empty(robot.nv), robot.model
+    return (
+        lambda: lean.forward_dynamics(q, v, tau, _GRAVITY, out),
+        lambda: pin.aba(model, data, q, v, tau),
+    )
+
+
 def _cases(dm, robot, data, q, v, a, tau) -> dict[str, tuple[Callable, Callable | None]]:
     """(DeNOC call, Pinocchio call or None) per quantity, bound to one state."""
     model = robot.model
+    if robot.floating:
+        return {
+            "forward_dynamics_floating": (
+                lambda: dm.forward_dynamics(q, v, tau),
+                lambda: pin.aba(model, data, q, v, tau),
+            ),
+            "forward_dynamics_floating_lean": _lean_case(dm, robot, data, q, v, tau),
+        }
     return {
         "gim": (lambda: dm.gim(q), lambda: pin.crba(model, data, q)),
         "gim_diagonal": (
@@ -51,6 +92,7 @@ def _cases(dm, robot, data, q, v, a, tau) -> dict[str, tuple[Callable, Callable 
             lambda: dm.forward_dynamics(q, v, tau),
             lambda: pin.aba(model, data, q, v, tau),
         ),
+        "forward_dynamics_lean": _lean_case(dm, robot, data, q, v, tau),
     }
 
 
@@ -59,8 +101,11 @@ def measure(context: BenchContext) -> Table:
     sizes = QUICK_SIZES if context.quick else FULL_SIZES
     repeats, min_round = (3, 0.002) if context.quick else (5, 0.05)
     table = Table("denoc", COLUMNS)
-    for n in sizes:
-        robot = load_robot(f"chain:{n}")
+    folder = Path(tempfile.mkdtemp(prefix="gimwatch-bench-"))
+    robots = [(n, lambda n=n: load_robot(f"chain:{n}")) for n in sizes]
+    robots += [(n, lambda n=n: floating_chain(n, folder)) for n in sizes]
+    for n, build in robots:
+        robot = build()
         dm = denoc_model(robot)
         rng = np.random.default_rng(context.seed)
         q = random_configurations(robot, 1, seed=context.seed)[0]
@@ -68,7 +113,7 @@ def measure(context: BenchContext) -> Table:
         data = data_if_it_fits(robot)
         note = "" if data is not None else "Pinocchio not timed: its Data would not fit in memory"
         for quantity, (denoc_call, pin_call) in _cases(dm, robot, data, q, v, a, tau).items():
-            context.progress(f"  chain:{n}: {quantity}")
+            context.progress(f"  chain:{n}{' floating' * robot.floating}: {quantity}")
             denoc_us = time_call(denoc_call, repeats=repeats, min_round_s=min_round).median_s
             pin_us = (
                 time_call(pin_call, repeats=repeats, min_round_s=min_round).median_s
@@ -88,12 +133,36 @@ def measure(context: BenchContext) -> Table:
             )
         del data
         gc.collect()
+    shutil.rmtree(folder, ignore_errors=True)
     return table
+
+
+#: Issue 16: DeNOC forward dynamics ≤ 3× ABA at n = 10 and ≤ 1.2× at n ≥ 100 (both bases).
+FD_TARGETS = {10: 3.0, 100: 1.2, 500: 1.2}
+
+
+def verdicts(rows: list[dict]) -> list[str]:
+    """The lean forward dynamics against issue 16's targets (one line per size and base)."""
+    lines = []
+    for row in rows:
+        if row["quantity"] in ("forward_dynamics_lean", "forward_dynamics_floating_lean"):
+            limit = FD_TARGETS.get(row["n"])
+            if limit is None or not np.isfinite(row["ratio"]):
+                continue
+            base = "floating" if "floating" in row["quantity"] else "fixed"
+            verdict = "met" if row["ratio"] <= limit else "not met"
+            lines.append(
+                f"n = {row['n']}, {base} base: DeNOC FD / ABA = {row['ratio']:.3g} "
+                f"(target ≤ {limit:g}: {verdict})"
+            )
+    return lines
 
 
 def run(context: BenchContext) -> SectionResult:
     """Measure, plot ``denoc_cost.png`` and summarise the ratios."""
-    table = measure(context)
+    # BLAS on one thread, set here: the CLI's limit misses an OpenBLAS loaded after it
+    with threadpool_limits(limits=1, user_api="blas"):
+        table = measure(context)
     figure = plot_denoc_cost(table.rows, context.output / "denoc_cost.png")
     columns = {
         "n": "n",
@@ -103,7 +172,11 @@ def run(context: BenchContext) -> SectionResult:
         "ratio": "DeNOC / Pinocchio",
         "note": "note",
     }
-    fd = {r["n"]: r["ratio"] for r in table.rows if r["quantity"] == "forward_dynamics"}
+    fd = {
+        f"{r['quantity']}:{r['n']}": r["ratio"]
+        for r in table.rows
+        if r["quantity"].startswith("forward_dynamics")
+    }
     text = [
         "Rod chains `chain:n`, one seeded random state; median µs per call. DeNOC is "
         "gimwatch's own implementation, no Pinocchio: the O(n) operations (diagonal, inverse "
@@ -111,6 +184,12 @@ def run(context: BenchContext) -> SectionResult:
         "per-depth NumPy recursions; Pinocchio is C++.",
         "",
         markdown_table(table.rows, columns),
+        "",
+        "`*_lean` rows: `DenocModel.lean()`, one compiled call with preallocated buffers (no "
+        "argument checks); the other rows go through `DenocModel`'s checked API. Floating: "
+        "the chain on a free-flyer, its base a 2.2 kg rod.",
+        "",
+        *[f"- {line}" for line in verdicts(table.rows)],
     ]
     return SectionResult(
         name="denoc",
@@ -119,5 +198,8 @@ def run(context: BenchContext) -> SectionResult:
         figures=[figure],
         markdown="\n".join(text),
         headline="\n".join(text),
-        summary={"forward_dynamics_ratio": {str(k): v for k, v in fd.items()}},
+        summary={
+            "forward_dynamics_ratio": {str(k): v for k, v in fd.items()},
+            "targets": verdicts(table.rows),
+        },
     )

@@ -1,20 +1,26 @@
 """The ``gimwatch`` command line: parse, call the library, print.
 
 This package is the only place that prints or exits. Each subcommand lives in its own
-module with ``add_arguments(parser)`` and ``run(args) -> int``; :data:`COMMANDS` lists
-them. Errors gimwatch raises on purpose become one line on stderr and exit status 2.
+module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``;
+:data:`COMMANDS` maps each name to its module and one-line help. Only the module of the
+command being run is imported (a command's imports cost nothing to the others, nor to
+``gimwatch --help``). Errors gimwatch raises on purpose become one line on stderr and exit
+status 2; a mistyped command gets a suggestion.
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import warnings
 from collections.abc import Sequence
+from importlib import import_module  # bound now: tests may patch importlib
 from types import ModuleType
 
 from gimwatch._version import __version__
 from gimwatch.errors import GimwatchError
+from gimwatch.suggest import did_you_mean
 
 __all__ = ["get_argument_parser", "main"]
 
@@ -25,31 +31,124 @@ class UsageError(GimwatchError):
     """A command line argparse rejected."""
 
 
+#: Command name -> (module, one-line help). The help is repeated here so that listing the
+#: commands imports none of them; tests check it equals the module's ``HELP``.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "chain": ("gimwatch.cli.chain", "write the URDF of an n-link chain of homogeneous rods"),
+    "analyze": (
+        "gimwatch.cli.analyze",
+        "conditioning of M(q): kappa, diagonal ratio, pivot ratios, spectrum",
+    ),
+    "crosscheck": (
+        "gimwatch.cli.crosscheck",
+        "compare DeNOC with Pinocchio (crba, rnea, aba, cholesky) at random states",
+    ),
+    "simulate": (
+        "gimwatch.cli.simulate",
+        "simulate a scene (TOML) and watch the conditioning of M(q)",
+    ),
+    "survey": (
+        "gimwatch.cli.survey",
+        "does the diagonal ratio track kappa? a report over many robots and configurations",
+    ),
+    "stress": (
+        "gimwatch.cli.stress",
+        "hard cases: is M SPD, DeNOC = CRBA, q̈ within C·kappa·eps of mpmath, simulations finite",
+    ),
+    "bench": (
+        "gimwatch.cli.bench",
+        "what accuracy costs in time: tables, plots and a Markdown report",
+    ),
+    "demo": (
+        "gimwatch.cli.demo",
+        "the main job: the paper's swinging 4-, 10- and 20-link chains, watched",
+    ),
+    "robots": ("gimwatch.cli.robots", "list the robots gimwatch can load: name, nv, base, source"),
+    "metrics": ("gimwatch.cli.metrics", "list the metrics gimwatch can compute and watch"),
+}
+
+
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, no usage dump
         raise UsageError(f"{self.prog}: {message}")
 
 
+class HelpFormatter(argparse.HelpFormatter):
+    """Shows each option's default, and docstring markup (````x````) as plain text."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        default = action.default
+        hidden = default is None or default is False or default is argparse.SUPPRESS
+        if hidden or default == [] or "default" in text or f"({default})" in text:
+            return text
+        if action.option_strings or action.nargs in (argparse.OPTIONAL, argparse.ZERO_OR_MORE):
+            text += " (default: %(default)s)"
+        return text
+
+    def _format_text(self, text: str) -> str:
+        return super()._format_text(_plain(text))
+
+    def _expand_help(self, action: argparse.Action) -> str:
+        return _plain(super()._expand_help(action))
+
+
+def _plain(text: str) -> str:
+    """Drop reST markup from docstrings used as help: ``x`` and :data:`x` become x."""
+    text = re.sub(r":\w+:`~?([^`]+)`", r"\1", text)
+    return text.replace("``", "")
+
+
 def _commands() -> dict[str, ModuleType]:
-    from gimwatch.cli import analyze, bench, chain, crosscheck, demo, simulate, stress, survey
-
-    modules = (chain, analyze, crosscheck, simulate, survey, stress, bench, demo)
-    return {module.NAME: module for module in modules}
+    """Every command's module (imports them all; the command line imports only one)."""
+    return {name: import_module(module) for name, (module, _) in COMMANDS.items()}
 
 
-def get_argument_parser() -> argparse.ArgumentParser:
-    """The argument parser with one subparser per command."""
+def get_argument_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser with one subparser per command.
+
+    Args:
+        command: Declare only this command's arguments (and import only its module); the
+            others are listed with their help. ``None`` declares every command's arguments,
+            ``""`` none (enough for ``gimwatch --help``).
+    """
     parser = _Parser(
         prog="gimwatch",
         description="Watch the conditioning of a robot's generalized inertia matrix (GIM).",
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"gimwatch {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for name, module in _commands().items():
-        command = sub.add_parser(name, help=module.HELP, description=module.__doc__)
-        module.add_arguments(command)
-        command.set_defaults(run=module.run)
+    for name, (module_name, summary) in COMMANDS.items():
+        if command is not None and name != command:
+            sub.add_parser(name, help=summary)
+            continue
+        module = import_module(module_name)
+        parser_ = sub.add_parser(
+            name,
+            help=module.HELP,
+            description=module.__doc__,
+            formatter_class=HelpFormatter,
+        )
+        module.add_arguments(parser_)
+        parser_.set_defaults(run=module.run)
     return parser
+
+
+def _command_in(argv: Sequence[str]) -> str | None:
+    """The command named on the command line (the first word that is not an option).
+
+    Raises:
+        UsageError: The first word is no command; the message suggests the closest ones.
+    """
+    for word in argv:
+        if word.startswith("-"):
+            continue
+        if word in COMMANDS:
+            return word
+        hint = did_you_mean(word, COMMANDS)
+        raise UsageError(f"unknown command {word!r}{hint} (commands: {', '.join(COMMANDS)})")
+    return None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -89,7 +188,8 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def _run(argv: Sequence[str] | None) -> int:
     from threadpoolctl import threadpool_limits
 
-    args = get_argument_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    args = get_argument_parser(_command_in(argv) or "").parse_args(argv)
     # GIMs are small dense matrices: multi-threaded OpenBLAS makes their eigen-solves
     # 20-40x slower on 2 cores, so the command line keeps BLAS on one thread.
     with threadpool_limits(limits=1, user_api="blas"):

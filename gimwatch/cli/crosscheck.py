@@ -11,10 +11,10 @@ import argparse
 import sys
 
 from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.crosscheck import DEFAULT_TOLERANCE, CrossCheckResult, crosscheck_robot
 from gimwatch.errors import InputError, RobotError
 from gimwatch.model.robots import example_robot_names, load_robot
-from gimwatch.output.atomic import to_json
 
 NAME = "crosscheck"
 HELP = "compare DeNOC with Pinocchio (crba, rnea, aba, cholesky) at random states"
@@ -23,7 +23,7 @@ HELP = "compare DeNOC with Pinocchio (crba, rnea, aba, cholesky) at random state
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
     parser.add_argument("robots", nargs="+", metavar="ROBOT", help="robot specs, or 'all'")
-    parser.add_argument("--samples", type=positive_int, default=10, help="random states (10)")
+    parser.add_argument("--samples", type=positive_int, default=10, help="random states")
     parser.add_argument(
         "--seed", type=non_negative_int, default=0, help="seed of the random states"
     )
@@ -32,14 +32,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--tolerance",
         type=float,
         default=DEFAULT_TOLERANCE,
-        help=f"largest relative error that passes ({DEFAULT_TOLERANCE:g})",
+        help="largest relative error that passes",
     )
-    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    add_output_arguments(parser, what="robots")
 
 
-def _print(results: list[CrossCheckResult], as_json: bool) -> None:
-    if as_json:
-        print(to_json([r.to_dict() for r in results]))
+#: ``--csv`` columns, one row per robot (the fields of :class:`CrossCheckResult`).
+CSV_COLUMNS = tuple(CrossCheckResult.__dataclass_fields__)
+
+
+def _print(results: list[CrossCheckResult], args: argparse.Namespace) -> None:
+    records = [r.to_dict() for r in results]
+    if args.json:
+        print(json_text({"tolerance": args.tolerance, "robots": records}))
+        return
+    if args.csv:
+        print(csv_text(records, CSV_COLUMNS))
         return
     headers = ["robot", "base", "nv", "GIM", "diag", "tau", "qdd", "qdd bwd", "pivots", "kappa"]
     rows = [
@@ -93,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
             )
     except KeyboardInterrupt:
         if results:
-            _print(results, args.json)
+            _print(results, args)
         raise
-    _print(results, args.json)
+    _print(results, args)
     return 0 if all(r.passed for r in results) else 1

@@ -59,7 +59,10 @@ def run(args: argparse.Namespace) -> int:
     if summary["energy_drift_relative"] is not None:
         lines.append(f"relative energy drift: {summary['energy_drift_relative']:.3g}")
     for name, value in summary["watch_maxima"].items():
-        lines.append(f"max {name}: {value:.6g}")
+        if name == "rcond":  # a reciprocal condition number: the smallest is the worst
+            lines.append(f"min rcond: {float(trajectory.watch['watch_rcond'].min()):.6g}")
+        else:
+            lines.append(f"max {name}: {value:.6g}")
     quality = summary["estimator_quality"]
     if isinstance(quality, dict):
         lines.append(

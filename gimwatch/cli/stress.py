@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from gimwatch.cli._format import non_negative_int, table
-from gimwatch.output.atomic import to_json
+from gimwatch.cli._records import csv_text, json_text
 from gimwatch.stress.cases import CASES
 from gimwatch.stress.suite import METHODS, run_stress, stress_markdown
 
@@ -24,12 +24,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--no-simulate", action="store_true", help="skip the 5 s simulation of each case"
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of v and tau")
-    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--markdown", action="store_true", help="print a Markdown table")
+    output = parser.add_mutually_exclusive_group()
+    output.add_argument(
+        "--json", action="store_true", help="print one JSON object with a list of cases"
+    )
+    output.add_argument("--csv", action="store_true", help="print the cases as CSV, one per line")
+    output.add_argument("--markdown", action="store_true", help="print a Markdown table")
 
 
 def _progress(line: str) -> None:
     print(line, file=sys.stderr, flush=True)
+
+
+def _flat(record: dict) -> dict:
+    """The record with ``errors`` spread into ``error_<method>`` columns (for CSV)."""
+    errors = record.pop("errors")
+    return {**record, **{f"error_{method}": errors.get(method) for method in METHODS}}
 
 
 def _cell(value: float | None) -> object:
@@ -45,8 +55,12 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         progress=_progress,
     )
+    records = [_flat(r.to_dict()) for r in results]
     if args.json:
-        print(to_json([r.to_dict() for r in results]))
+        print(json_text({"cases": [r.to_dict() for r in results]}))
+    elif args.csv:
+        columns = [k for k in records[0] if k != "note"] + ["note"] if records else []
+        print(csv_text(records, columns))
     elif args.markdown:
         print(stress_markdown(results))
     else:

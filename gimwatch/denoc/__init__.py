@@ -8,12 +8,16 @@ and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can che
 
 * :class:`DenocModel` — any URDF tree, fixed or floating base, in Pinocchio's coordinate
   layout; the recursions batched per tree depth in NumPy (:mod:`.recursions`).
+* :class:`LeanModel` — the O(n) operations (diag M, M·x, M⁻¹·y, forward and inverse
+  dynamics) as one compiled call each with preallocated buffers, fixed and floating bases,
+  in Pinocchio's coordinate order (:mod:`.fused`); ``DenocModel.lean()`` builds it.
 * :class:`LinearTimeModel` — fixed-base trees, the same recursions compiled with numba
   (:mod:`.compiled`): O(n) time and memory, for chains of 10^4–10^5 links, with the
   matrix-free condition number :func:`matrix_free_kappa`.
 """
 
 from gimwatch.denoc.chain import chain_body_tree
+from gimwatch.denoc.lean import LeanModel
 from gimwatch.denoc.linear import (
     ConfigurationState,
     LinearTimeModel,
@@ -27,6 +31,7 @@ __all__ = [
     "BodyTree",
     "ConfigurationState",
     "DenocModel",
+    "LeanModel",
     "LinearTimeModel",
     "MatrixFreeKappa",
     "chain_body_tree",

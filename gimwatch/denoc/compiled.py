@@ -26,17 +26,20 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "add_shift_congruence",
     "articulated_factor",
     "articulated_solve",
     "body_mass_matrices",
     "composite_diagonal",
+    "cross3",
     "inverse_dynamics",
     "kinematics",
 ]
 
 
 @njit(cache=True, inline="always")
-def _cross(a, b, out):
+def cross3(a, b, out):
+    """The cross product a × b of 3-vectors, written into out."""
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
     out[2] = a[0] * b[1] - a[1] * b[0]
@@ -139,7 +142,7 @@ def body_mass_matrices(rotation, mass, com, inertia):
 
 
 @njit(cache=True)
-def _add_shift_congruence(target, x, r, scratch):
+def add_shift_congruence(target, x, r, scratch):
     """Target += A_ijᵀ X A_ij, with A_ij = [[1, 0], [-r̃, 1]] (r = O_i - O_j); X symmetric.
 
     Blockwise, with X = [[a, b], [bᵀ, d]]: the top-right block becomes b + r̃ d, the top-left
@@ -205,7 +208,7 @@ def composite_diagonal(parent, joint_type, reach, e, body_mass):
         if j >= 0:
             for a in range(3):
                 r[a] = reach[i, a]
-            _add_shift_congruence(composite[j], composite[i], r, scratch)
+            add_shift_congruence(composite[j], composite[i], r, scratch)
     return diag
 
 
@@ -238,12 +241,12 @@ def inverse_dynamics(
         for k in range(3):
             r[k] = reach[i, k]
         # a = a0 + al0 × r + w0 × (w0 × r)
-        _cross(al0, r, t1)
-        _cross(w0, r, t2)
-        _cross(w0, t2, a)
+        cross3(al0, r, t1)
+        cross3(w0, r, t2)
+        cross3(w0, t2, a)
         for k in range(3):
             a[k] += a0[k] + t1[k]
-        _cross(w0, e[i], t1)  # ω_j × e_i
+        cross3(w0, e[i], t1)  # ω_j × e_i
         if joint_type[i] == 0:
             for k in range(3):
                 omega[i, k] = w0[k] + e[i, k] * qd[i]
@@ -257,9 +260,9 @@ def inverse_dynamics(
         d = offset[i]
         w = omega[i]
         # a_com = a + α × d + ω × (ω × d); f = m (a_com - g)
-        _cross(alpha[i], d, t1)
-        _cross(w, d, t2)
-        _cross(w, t2, a_com)
+        cross3(alpha[i], d, t1)
+        cross3(w, d, t2)
+        cross3(w, t2, a_com)
         for k in range(3):
             force[i, k] = mass[i] * (a_com[k] + a[k] + t1[k] - gravity[k])
         # I_c = R I Rᵀ applied without forming it: I_c x = R (I (Rᵀ x))
@@ -280,8 +283,8 @@ def inverse_dynamics(
                 ic_alpha[k] += rot[k, m] * local_a
                 ic_omega[k] += rot[k, m] * local_w
         # n_O = I_c α + ω × I_c ω + d × f
-        _cross(w, ic_omega, t1)
-        _cross(d, force[i], t2)
+        cross3(w, ic_omega, t1)
+        cross3(d, force[i], t2)
         for k in range(3):
             moment[i, k] = ic_alpha[k] + t1[k] + t2[k]
     tau = np.empty(n)
@@ -292,7 +295,7 @@ def inverse_dynamics(
         if j >= 0:
             for k in range(3):
                 r[k] = reach[i, k]
-            _cross(r, force[i], t1)
+            cross3(r, force[i], t1)
             for k in range(3):
                 force[j, k] += force[i, k]
                 moment[j, k] += moment[i, k] + t1[k]
@@ -331,7 +334,7 @@ def articulated_factor(parent, joint_type, reach, e, body_mass):
                     articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / pivot
             for a in range(3):
                 r[a] = reach[i, a]
-            _add_shift_congruence(articulated[j], articulated[i], r, scratch)
+            add_shift_congruence(articulated[j], articulated[i], r, scratch)
     return u_vectors, pivots, articulated
 
 
@@ -388,9 +391,9 @@ def articulated_solve(
             w0 = zero if j < 0 else omega[j]
             for k in range(3):
                 r[k] = reach[i, k]
-            _cross(w0, r, t1)
-            _cross(w0, t1, t2)  # ω_j × (ω_j × r)
-            _cross(w0, e[i], t1)  # ω_j × e_i
+            cross3(w0, r, t1)
+            cross3(w0, t1, t2)  # ω_j × (ω_j × r)
+            cross3(w0, e[i], t1)  # ω_j × e_i
             for k in range(3):
                 bias_acc[i, 3 + k] = t2[k]
                 if joint_type[i] == 0:
@@ -402,8 +405,8 @@ def articulated_solve(
             # b_i: f_b = m ω × (ω × d), n_b = ω × I_c ω + d × f_b
             w = omega[i]
             d = offset[i]
-            _cross(w, d, t1)
-            _cross(w, t1, t2)
+            cross3(w, d, t1)
+            cross3(w, t1, t2)
             for k in range(3):
                 bias[i, 3 + k] = mass[i] * t2[k]
             rot = rotation[i]
@@ -415,8 +418,8 @@ def articulated_solve(
                 )
             for k in range(3):
                 t1[k] = rot[k, 0] * local[0] + rot[k, 1] * local[1] + rot[k, 2] * local[2]
-            _cross(w, t1, t2)
-            _cross(d, bias[i, 3:], t1)
+            cross3(w, t1, t2)
+            cross3(d, bias[i, 3:], t1)
             for k in range(3):
                 bias[i, k] = t2[k] + t1[k]
     rhs = np.empty(n)

@@ -16,6 +16,7 @@ import numpy.typing as npt
 
 from gimwatch.denoc import recursions
 from gimwatch.denoc.chain import chain_body_tree
+from gimwatch.denoc.lean import LeanModel
 from gimwatch.denoc.linear import ConfigurationState, LinearTimeModel
 from gimwatch.denoc.tree import FREE_FLYER_NAME, BodyTree, read_body_tree
 from gimwatch.errors import ConditioningError, InputError
@@ -41,9 +42,11 @@ class DenocModel:
     Build it with :meth:`from_urdf` (or :meth:`from_chain`). Internally bodies are numbered
     parents-first; the maps below translate to and from the public (``joint_names``) order.
 
-    With a fixed base, the O(n) operations (diagonal, inverse and forward dynamics, pivots,
-    M·x, M⁻¹·x, energy) run the compiled recursions of :class:`~.linear.LinearTimeModel`;
-    the dense GIM and floating bases use the per-depth NumPy recursions of :mod:`.recursions`.
+    The O(n) operations run compiled recursions: the diagonal and inverse and forward
+    dynamics those of :meth:`lean` (fixed and floating bases), the pivots, M·x, M⁻¹·x and the
+    energy those of :class:`~.linear.LinearTimeModel` (fixed base); the dense GIM, the
+    composite mass matrices and floating-base pivots use the per-depth NumPy recursions of
+    :mod:`.recursions`.
     """
 
     def __init__(self, tree: BodyTree, joint_order: Sequence[str] | None = None) -> None:
@@ -117,6 +120,22 @@ class DenocModel:
         if not hasattr(self, "_linear"):
             self._linear = LinearTimeModel(self.tree)
         return self._linear
+
+    def lean(self) -> LeanModel:
+        """The same recursions at one compiled call per operation, buffers preallocated.
+
+        Fixed or floating base, Pinocchio's coordinate order, no argument checks (see
+        :class:`~gimwatch.denoc.lean.LeanModel`). Made on first use and kept.
+        """
+        if not hasattr(self, "_lean"):
+            q_index = self._q_index.copy()
+            q_index[0] = self._root_q
+            start = 6 if self.tree.floating else 0
+            v_index = np.zeros(self.tree.size, dtype=np.intp)
+            v_index[1:] = self._v_index[start:]
+            v_index[0] = self._v_index[0] if self.tree.floating else 0
+            self._lean = LeanModel(self.tree, q_index, v_index, self.nq, self.nv)
+        return self._lean
 
     def state(self, q: npt.ArrayLike) -> ConfigurationState:
         """The compiled model's state at ``q`` (fixed base only), for repeated O(n) products.
@@ -194,9 +213,7 @@ class DenocModel:
 
     def gim_diagonal(self, q: npt.ArrayLike) -> np.ndarray:
         """Diag M(q) = (p_iᵀ M̃_i p_i) in O(n) (Shah & Saha 2013, Eq. 13)."""
-        if self.linear is not None:
-            return self.to_public(self.state(q).diagonal())
-        return self.to_public(recursions.gim_diagonal(self.tree, self._kinematics(q)))
+        return self.lean().gim_diagonal(_vector("q", q, self.nq))
 
     def composite_mass_matrices(self, q: npt.ArrayLike) -> dict[str, np.ndarray]:
         """M̃_i (6×6, ``[ω; v]`` order, about the body origin, world axes) per joint (Eq. 12).
@@ -225,12 +242,12 @@ class DenocModel:
                 gravity=_vector("gravity", gravity, 3),
             )
             return self.to_public(tau)
-        kin = self._kinematics(q)
-        qd, root_v = self._split(self.to_internal("v", v))
-        qdd, root_a = self._split(self.to_internal("a", a))
-        g = _vector("gravity", gravity, 3)
-        tau = recursions.inverse_dynamics(self.tree, kin, qd, qdd, root_v, root_a, g)
-        return self.to_public(tau)
+        return self.lean().inverse_dynamics(
+            _vector("q", q, self.nq),
+            _vector("v", v, self.nv),
+            _vector("a", a, self.nv),
+            _vector("gravity", gravity, 3),
+        )
 
     def forward_dynamics(
         self,
@@ -240,24 +257,19 @@ class DenocModel:
         *,
         gravity: npt.ArrayLike = _GRAVITY,
     ) -> np.ndarray:
-        """q̈ = M(q)⁻¹ (τ − h(q, v)) by Saha's O(n) UDUᵀ recursion from the tips."""
-        if self.linear is not None:
-            state = self.state(q)
-            self._check_pivots(state.pivots())
-            qdd = state.forward_dynamics(
-                self.to_internal("v", v),
-                self.to_internal("tau", tau),
-                gravity=_vector("gravity", gravity, 3),
-            )
-            return self.to_public(qdd)
-        kin = self._kinematics(q)
-        qd, root_v = self._split(self.to_internal("v", v))
-        torque = self.to_internal("tau", tau)
-        g = _vector("gravity", gravity, 3)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            qdd, pivots = recursions.forward_dynamics(self.tree, kin, qd, torque, root_v, g)
-        self._check_pivots(pivots)
-        return self.to_public(qdd)
+        """q̈ = M(q)⁻¹ (τ − h(q, v)) by Saha's O(n) UDUᵀ recursion from the tips (compiled)."""
+        arguments = (
+            _vector("q", q, self.nq),
+            _vector("v", v, self.nv),
+            _vector("tau", tau, self.nv),
+            _vector("gravity", gravity, 3),
+        )
+        try:
+            return self.lean().forward_dynamics(*arguments)
+        except ConditioningError:
+            pass  # singular: find and name the coordinate whose pivot vanished
+        self._check_pivots(self._internal_pivots(arguments[0]))
+        raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
 
     def _check_pivots(self, pivots: np.ndarray) -> None:
         """Raise when an elimination pivot is not positive: M(q) is singular there."""
@@ -287,10 +299,13 @@ class DenocModel:
         articulated block. A joint that moves no mass has pivot 0 (M(q) is singular); the
         pivots eliminated after it are then NaN.
         """
+        return self.to_public(self._internal_pivots(q))
+
+    def _internal_pivots(self, q: npt.ArrayLike) -> np.ndarray:
         if self.linear is not None:
-            return self.to_public(self.state(q).pivots())
+            return self.state(q).pivots()
         with np.errstate(divide="ignore", invalid="ignore"):
             _, pivots = recursions.forward_dynamics(
                 self.tree, self._kinematics(q), None, None, None, np.zeros(3)
             )
-        return self.to_public(pivots)
+        return pivots

@@ -21,8 +21,6 @@ from __future__ import annotations
 
 import numpy as np
 import numpy.typing as npt
-import scipy.linalg
-from scipy.linalg import lapack
 
 from gimwatch.errors import ConditioningError, InputError
 
@@ -71,15 +69,26 @@ def check_gim(matrix: npt.ArrayLike) -> np.ndarray:
 
 def _cholesky_lower(M: np.ndarray) -> np.ndarray:
     try:
-        return scipy.linalg.cholesky(M, lower=True, check_finite=False)
+        return np.linalg.cholesky(M)  # LAPACK potrf; NumPy's, so scipy.linalg loads only for pocon
     except np.linalg.LinAlgError as exc:
         raise ConditioningError(f"the GIM must be positive definite ({exc})") from exc
 
 
 def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
-    """Eigenvalues of the GIM in ascending order (symmetric eigensolver, LAPACK syevr)."""
+    """Eigenvalues of the GIM in ascending order (symmetric eigensolver, LAPACK).
+
+    NumPy's ``syevd`` first: importing ``scipy.linalg`` costs about 0.2 s, more than a whole
+    ``gimwatch analyze`` of a small robot otherwise. When κ nears 1/eps, λmin is round-off
+    (about eps·λmax) and its sign depends on the LAPACK driver; a λmin ≤ 0 from ``syevd`` is
+    recomputed with SciPy's ``syevr`` (the driver gimwatch used before) before M is declared
+    not positive definite, so such numerically singular GIMs keep their former verdict.
+    """
     M = check_gim(matrix)
-    values = scipy.linalg.eigvalsh(M, check_finite=False)
+    values = np.linalg.eigvalsh(M)
+    if values[0] <= 0:
+        import scipy.linalg
+
+        values = scipy.linalg.eigvalsh(M, check_finite=False)
     if values[0] <= 0:
         raise ConditioningError(
             f"the GIM must be positive definite, got smallest eigenvalue {values[0]:.6g}"
@@ -207,6 +216,8 @@ def condition_estimate_1norm(matrix: npt.ArrayLike) -> float:
     The estimate is a lower bound of κ₁ that is usually within a factor of a few; κ₂ lies
     within a factor n of κ₁.
     """
+    from scipy.linalg import lapack
+
     M = check_gim(matrix)
     factor = _cholesky_lower(M)
     anorm = float(np.max(np.sum(np.abs(M), axis=0)))

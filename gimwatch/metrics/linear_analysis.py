@@ -19,6 +19,7 @@ from gimwatch.denoc import DenocModel, matrix_free_kappa
 from gimwatch.errors import InputError
 from gimwatch.metrics.dense_analysis import GimAnalysis, check_massless
 from gimwatch.model.chains import ChainSpec
+from gimwatch.suggest import did_you_mean
 
 __all__ = ["LINEAR_METRICS", "analyze_linear", "chain_configurations"]
 
@@ -63,7 +64,12 @@ def analyze_linear(
     """
     unknown = sorted(set(metrics) - set(LINEAR_METRICS))
     if unknown:
-        raise InputError("metrics", f"among {LINEAR_METRICS} on the O(n) path", unknown)
+        raise InputError(
+            "metrics",
+            f"among {LINEAR_METRICS} on the O(n) path",
+            unknown,
+            hint=did_you_mean(unknown[0], LINEAR_METRICS).removeprefix("; "),
+        )
     state = model.state(q)
     diag = model.to_public(state.diagonal())
     check_massless(diag, model.joint_names, name=name, source=model.tree.source)

@@ -30,9 +30,11 @@ __all__ = ["METRICS", "Alarm", "EstimatorQuality", "Watch", "estimator_quality"]
 class _GimState:
     """Lazily computed, shared per-sample quantities of M(q)."""
 
-    def __init__(self, robot: Robot, data, q: np.ndarray, full: bool, dynamics=None) -> None:
+    def __init__(
+        self, robot: Robot, data, q: np.ndarray, full: bool, dynamics=None, lean=None
+    ) -> None:
         self.robot, self.data, self.q, self.full = robot, data, q, full
-        self.dynamics = dynamics
+        self.dynamics, self.lean = dynamics, lean
         self._M = self._diag = self._eig = None
 
     @property
@@ -52,11 +54,22 @@ class _GimState:
             self._diag = (
                 np.diag(self.M).copy()
                 if self.full
+                else self.lean.gim_diagonal(self.q)  # one compiled call, buffers kept
+                if self.lean is not None
                 else gim_diagonal(self.robot, self.q, data=self.data)
                 if self.dynamics is None
                 else self.dynamics.gim_diagonal(self.q)
             )
         return self._diag
+
+    @property
+    def delta(self) -> float:
+        """δ = max M_ii / min M_ii: one compiled call when DeNOC's lean model serves diag M."""
+        if self.lean is not None and not self.full and self._diag is None:
+            value = self.lean.diagonal_ratio(self.q)
+            if 1.0 <= value < math.inf:  # else the checked path below names the problem
+                return value
+        return conditioning.diagonal_ratio(self.diag)
 
     @property
     def eigenvalues(self) -> np.ndarray:
@@ -116,6 +129,34 @@ class KappaLanczos(Metric):
         return result.kappa
 
 
+class KappaTracked(Metric):
+    """κ₂ = λmax / λmin (Eq. 6) to a relative tolerance 1e-10, tracked at O(n) per sample.
+
+    :class:`gimwatch.metrics.tracker.KappaTracker` on DeNOC's compiled M·x and M⁻¹·y (or
+    Pinocchio's RNEA/ABA when DeNOC cannot read the robot), warm-started from the previous
+    sample's eigenvectors, with a detected cold-start fallback. ``products`` lists the O(n)
+    products each sample took.
+    """
+
+    name = "kappa_tracked"
+    full = False
+
+    def __init__(self) -> None:
+        self.tracker = None
+        self.products: list[int] = []
+
+    def __call__(self, state):
+        if self.tracker is None:
+            from gimwatch.metrics.tracker import KappaTracker
+            from gimwatch.metrics.tracker_providers import gim_products
+
+            provider = state.lean or gim_products(state.robot, state.dynamics, state.data)
+            self.tracker = KappaTracker(provider, state.robot.nv)
+        result = self.tracker.sample(state.q)
+        self.products.append(result.products)
+        return result.kappa
+
+
 class DiagonalRatio(Metric):
     """δ = max M_ii / min M_ii (Sec. 4), from the O(n) diagonal."""
 
@@ -123,7 +164,7 @@ class DiagonalRatio(Metric):
     full = False
 
     def __call__(self, state):
-        return conditioning.diagonal_ratio(state.diag)
+        return state.delta
 
 
 class ScaledDiagonalRatioMetric(Metric):
@@ -138,7 +179,8 @@ class ScaledDiagonalRatioMetric(Metric):
     def __call__(self, state):
         if not self.estimator.calibrated:
             self.estimator.calibrate(state.M)
-        return self.estimator(state.diag)
+            return self.estimator(state.diag)
+        return self.estimator.alpha * state.delta  # Eq. 15 on the O(n) δ
 
 
 class PivotRatioForward(Metric):
@@ -198,6 +240,7 @@ METRICS: dict[str, type[Metric]] = {
     for cls in (
         Kappa,
         KappaLanczos,
+        KappaTracked,
         DiagonalRatio,
         ScaledDiagonalRatioMetric,
         PivotRatioForward,
@@ -246,6 +289,12 @@ class Watch:
         self.metrics = {name: METRICS[name]() for name in metrics}
         self.full = any(m.full for m in self.metrics.values())
         self.data = robot.new_data() if self.metrics and dynamics is None else None
+        # diag M by one compiled DeNOC call (preallocated buffers) when M itself is not needed
+        self.lean = None
+        if self.metrics and not self.full:
+            from gimwatch.metrics.tracker_providers import lean_model
+
+            self.lean = lean_model(robot, dynamics)
         self.alarm_metric, self.alarm_threshold = alarm_metric, alarm_threshold
         self.times: list[float] = []
         self.series: dict[str, list] = {name: [] for name in self.metrics}
@@ -256,7 +305,7 @@ class Watch:
         """Record the watched metrics at time ``t`` (s); return a new alarm, if one is raised."""
         if not self.metrics:
             return None
-        state = _GimState(self.robot, self.data, q, self.full, self.dynamics)
+        state = _GimState(self.robot, self.data, q, self.full, self.dynamics, self.lean)
         self.times.append(float(t))
         for name, metric in self.metrics.items():
             self.series[name].append(metric(state))

@@ -86,6 +86,13 @@ class Robot:
                 names.extend(f"{joint_name}[{k}]" for k in range(joint.nv))
         object.__setattr__(self, "dof_names", tuple(names))
 
+    def __repr__(self) -> str:  # the model and the URDF text would fill a screen
+        base = "floating" if self.floating else "fixed"
+        return (
+            f"Robot(name={self.name!r}, spec={self.spec!r}, nq={self.nq}, nv={self.nv}, "
+            f"base={base!r}, source={self.source!r})"
+        )
+
     @property
     def nq(self) -> int:
         """Number of configuration coordinates."""

@@ -126,15 +126,21 @@ class DenocBackend(Backend):
                 robot.urdf_xml, floating=robot.floating, joint_order=robot.joint_names
             )
         self._g = tuple(float(x) for x in self.gravity)
+        self.lean = self.denoc.lean()  # one compiled call per evaluation, buffers kept
 
     def forward_dynamics(self, q, v, tau):
-        return np.asarray(self.denoc.forward_dynamics(q, v, tau, gravity=self._g), dtype=float)
+        return self.lean.forward_dynamics(
+            np.asarray(q, dtype=float),
+            np.asarray(v, dtype=float),
+            np.asarray(tau, dtype=float),
+            self.gravity,
+        )
 
     def gim(self, q):
         return self.denoc.gim(q)
 
     def gim_diagonal(self, q):
-        return self.denoc.gim_diagonal(q)
+        return self.lean.gim_diagonal(np.asarray(q, dtype=float))
 
     def energy(self, q, v):
         if self.robot.floating:

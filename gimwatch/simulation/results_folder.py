@@ -47,7 +47,8 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
     if "watch_kappa" in watch:
         delta = watch.get("watch_diagonal_ratio")
         if delta is None and "watch_scaled_diagonal_ratio" in watch:
-            delta = watch["watch_scaled_diagonal_ratio"]  # αδ ∝ δ: α cancels in α₀δ/α₀δ₀
+            # δ = αδ / α, so that estimator_quality's α is the watch's α (summary "alpha")
+            delta = watch["watch_scaled_diagonal_ratio"] / (trajectory.alpha or 1.0)
         if delta is not None:
             result = estimator_quality(watch["watch_kappa"], delta)
             quality = asdict(result) if result else "fewer than 3 samples"
@@ -74,7 +75,14 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
         "energy_drift_relative": trajectory.energy_drift(),
         "watched": list(scene.watch.metrics),
         "watch_maxima": maxima,
-        "alpha": trajectory.alpha,
+        # α = κ(t0)/δ(t0): the watch's when it watched αδ, else the estimator quality's
+        "alpha": (
+            trajectory.alpha
+            if trajectory.alpha is not None
+            else quality.get("alpha")
+            if isinstance(quality, dict)
+            else None
+        ),
         "estimator_quality": quality,
         "alarms": [asdict(alarm) for alarm in trajectory.alarms],
         "actions": list(trajectory.actions),

@@ -28,6 +28,7 @@ from gimwatch.simulation.effects import EFFECTS
 from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.simulation.parameters import Parameter
 from gimwatch.simulation.torque_laws import TORQUE_LAWS
+from gimwatch.suggest import did_you_mean
 
 __all__ = [
     "BACKENDS",
@@ -348,7 +349,9 @@ def _watch(reader: _Reader) -> WatchSpec:
     for metric in metrics:
         if metric not in METRIC_NAMES:
             raise reader.fail(
-                "metrics", f"unknown metric {metric!r}; expected one of {', '.join(METRIC_NAMES)}"
+                "metrics",
+                f"unknown metric {metric!r}; expected one of {', '.join(METRIC_NAMES)}"
+                + did_you_mean(metric, METRIC_NAMES),
             )
     if len(set(metrics)) != len(metrics):
         raise reader.fail("metrics", f"lists a metric twice: {metrics!r}")

@@ -11,6 +11,8 @@ from gimwatch.errors import SimulationError
 from gimwatch.metrics.watch import Alarm
 
 if TYPE_CHECKING:
+    import pandas as pd
+
     from gimwatch.simulation.scene import Scene
 
 __all__ = ["STATUSES", "Trajectory"]
@@ -80,6 +82,29 @@ class Trajectory:
             return None
         deviation = float(np.max(np.abs(self.energy - self.energy[0])))
         return deviation / max(abs(float(self.energy[0])), self.kinetic_peak, 1e-300)
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """The run as a table: one row per sample.
+
+        Columns as in a results folder's ``trajectory.csv`` (``t``, ``q:<name>``,
+        ``v:<name>``), then ``energy`` (conservative scenes) and the watched metrics by name
+        (vectors as ``<metric>:<k>``) when sampled with the state.
+        Needs pandas (``pip install 'gimwatch[pandas]'``).
+        """
+        from gimwatch.output.dataframe import trajectory_frame
+
+        nq = self.q.shape[1] if self.q.ndim == 2 else 0
+        names = list(self.dof_names)
+        q_names = names if nq == len(names) else [f"q{i}" for i in range(nq)]
+        return trajectory_frame(
+            self.t,
+            self.q,
+            self.v,
+            q_names=q_names,
+            v_names=list(self.dof_names),
+            energy=self.energy,
+            watch=self.watch,
+        )
 
     def raise_for_status(self) -> None:
         """Raise :class:`SimulationError` if the run diverged or the solver failed."""

@@ -26,6 +26,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg
@@ -65,6 +66,21 @@ METRICS = ("kappa", "delta", "pivot_forward", "pivot_backward", "lambda_min", "l
 DOF_METRICS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_min_dof", "lambda_max_dof")
 _NO_DOF = "has no degree of freedom"
 WORST_COUNT = 3
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+#: Estimated in-process cost of one sample (CRBA, eigh, two factorisations), in seconds: a
+#: constant for the Python around it plus the O(nv³) eigensolve. Only decides whether a
+#: default sweep starts worker processes (:data:`gimwatch.survey.sweep.POOL_WORTH_S`).
+SAMPLE_COST_S, SAMPLE_COST_S_PER_NV3 = 2e-3, 6e-9
+#: Estimated in-process cost of one simulated run, per simulated second.
+RUN_COST_S_PER_S = 1.0
+
+
+def _sample_cost_s(nv: int) -> float:
+    return SAMPLE_COST_S + SAMPLE_COST_S_PER_NV3 * nv**3
 
 
 def survey_robot_specs(specs: Sequence[str]) -> list[str]:
@@ -220,6 +236,16 @@ class SurveyResult:
     not_reached: tuple[str, ...] = ()
     trajectory_settings: TrajectorySettings | None = None
 
+    def to_dataframe(self) -> pd.DataFrame:
+        """One row per (robot, sample): robot, nv, base, sample (0 = neutral) and the metrics.
+
+        Coordinates (``*_dof``) are given by name. Needs pandas
+        (``pip install 'gimwatch[pandas]'``).
+        """
+        from gimwatch.output.dataframe import survey_frame
+
+        return survey_frame(self.robots)
+
 
 def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> RobotSurvey:
     kappa, delta = metrics["kappa"], metrics["delta"]
@@ -309,7 +335,8 @@ def run_survey(
         floating: Give every robot a free-flyer base. Without it, robots with no joint
             (drones) get one anyway and say so in ``note``.
         chunk_size: Samples per task.
-        workers: Local processes (default: every core; 1 runs in this process).
+        workers: Local processes; 1 runs in this process. Default: this process for small
+            surveys (estimated under a few seconds), else every core.
         scheduler: ``"local"`` or a Dask scheduler address to run the chunks on Dask.
         progress: Called as ``progress(finished_chunks, total_chunks)`` after each chunk.
         trajectories: Also simulate short runs from random samples 1..count of each robot
@@ -334,7 +361,8 @@ def run_survey(
     for k, (robot, _, qs) in enumerate(loaded):
         for start in range(0, len(qs), chunk_size):
             chunk = qs[start : start + chunk_size]
-            tasks.append(Task(_survey_chunk, (_worker_spec(robot.spec), robot.floating, chunk)))
+            args = (_worker_spec(robot.spec), robot.floating, chunk)
+            tasks.append(Task(_survey_chunk, args, cost_s=len(chunk) * _sample_cost_s(robot.nv)))
             owners.append((k, start))
     runs_wanted = 0 if trajectories is None else min(trajectories.count, samples)
     for k, (robot, _, qs) in enumerate(loaded):
@@ -342,7 +370,9 @@ def run_survey(
             continue
         for start in range(1, 1 + runs_wanted):
             args = (_worker_spec(robot.spec), robot.floating, qs[start], start, trajectories)
-            tasks.append(Task(_trajectory_task, args))
+            tasks.append(
+                Task(_trajectory_task, args, cost_s=RUN_COST_S_PER_S * trajectories.duration_s)
+            )
             owners.append((k, -start))  # negative: a run from that sample
     finished = 0
 

@@ -7,7 +7,10 @@ finished first: the same tasks give the same results on any backend.
 Backends:
 
 * ``workers=1`` — in this process, one task after another (notebooks, tests, debugging);
-* ``workers=N`` (default: every core) — a :class:`concurrent.futures.ProcessPoolExecutor`;
+* ``workers=N`` — a :class:`concurrent.futures.ProcessPoolExecutor`;
+* ``workers=None`` (default) — every core, unless every task states its cost and they add up
+  to less than :data:`POOL_WORTH_S`: starting worker processes (each imports gimwatch,
+  Pinocchio and SciPy) costs seconds, more than tiny sweeps take in this process;
 * ``scheduler="local"`` — a fresh Dask ``LocalCluster`` (one single-threaded worker per core);
 * ``scheduler="tcp://host:port"`` — an existing Dask scheduler.
 
@@ -27,15 +30,25 @@ from typing import Any
 
 from gimwatch.errors import InputError
 
-__all__ = ["SweepOutcome", "Task", "run_sweep", "run_task"]
+__all__ = ["POOL_WORTH_S", "SweepOutcome", "Task", "run_sweep", "run_task"]
+
+#: Estimated in-process seconds below which a sweep runs in this process by default: a pool
+#: of spawned workers took 3-8 s to start on a 2-core machine (2 robots x 20 samples: 8-10 s
+#: in a pool for 0.2 s of work).
+POOL_WORTH_S = 5.0
 
 
 @dataclass(frozen=True)
 class Task:
-    """One unit of work: ``function(*args)``; ``function`` must be importable by name."""
+    """One unit of work: ``function(*args)``; ``function`` must be importable by name.
+
+    ``cost_s`` is an estimate of its in-process time in seconds (None: unknown), used only to
+    decide whether a default sweep is worth a process pool.
+    """
 
     function: Callable[..., Any]
     args: tuple = ()
+    cost_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -57,6 +70,13 @@ def run_task(function: Callable[..., Any], *args: Any) -> Any:
 
     with threadpool_limits(limits=1, user_api="blas"):
         return function(*args)
+
+
+def _default_workers(tasks: Sequence[Task]) -> int:
+    costs = [task.cost_s for task in tasks]
+    if all(cost is not None for cost in costs) and sum(costs) < POOL_WORTH_S:
+        return 1
+    return os.cpu_count() or 1
 
 
 def _ignore_sigint() -> None:  # worker processes: Ctrl-C is the parent's business
@@ -170,8 +190,9 @@ def run_sweep(
 
     Args:
         tasks: The work; each function must be importable (it is pickled by name).
-        workers: Local processes (default: ``os.cpu_count()``); 1 runs in this process.
-            Ignored when ``scheduler`` is given.
+        workers: Local processes; 1 runs in this process. Default: this process when every
+            task states a cost and they sum to less than :data:`POOL_WORTH_S`, else
+            ``os.cpu_count()`` processes. Ignored when ``scheduler`` is given.
         scheduler: ``"local"`` for a fresh Dask ``LocalCluster``, or the address of a
             running Dask scheduler; None for local processes.
         progress: Called with the position of each finished task, in completion order.
@@ -193,10 +214,10 @@ def run_sweep(
             pass
         elif scheduler is not None:
             _run_dask(tasks, scheduler, done, results)
-        elif (workers or os.cpu_count() or 1) == 1:
+        elif (workers or _default_workers(tasks)) == 1:
             _run_serial(tasks, done, results)
         else:
-            _run_processes(tasks, workers or os.cpu_count() or 1, done, results)
+            _run_processes(tasks, workers or _default_workers(tasks), done, results)
     except KeyboardInterrupt:
         return SweepOutcome(results=results, interrupted=True)
     return SweepOutcome(results=results, interrupted=False)

@@ -1,0 +1,554 @@
+"""The DeNOC recursions fused into one compiled call each, fixed or floating base, no allocation.
+
+:mod:`.compiled` keeps one kernel per recursion (kinematics, body mass matrices, factor,
+solve), each allocating its outputs, and leaves the floating base to the NumPy recursions of
+:mod:`.recursions`. Here every public operation — diag M(q), M·x, M⁻¹·y, forward and inverse
+dynamics — is ONE compiled call that reads q, v, τ in Pinocchio's coordinate order, writes
+into caller-owned buffers and returns, so that a Python caller pays one dispatch per
+operation and nothing else (:class:`gimwatch.denoc.lean.LeanModel` owns the buffers).
+
+Arrays cover the whole tree, root included (body 0). With a fixed base body 0 is the world:
+its acceleration is ``[0; −g]`` (gravity as an upward acceleration of the base) and nothing is
+passed to it. With a floating base body 0 moves on Pinocchio's free-flyer: q = (x, y, z, qx,
+qy, qz, qw), v = (local linear, local angular), and its six columns are
+``P = [[0, R], [R, 0]]`` (local ``[v; ω]`` to the world twist ``[ω; v_O]``).
+
+Packed inputs (built once by :class:`~gimwatch.denoc.lean.LeanModel`):
+
+* ``index`` (N, 4) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic),
+  index of the body's first q entry, index of its v entry (for the root: of the first of six);
+* ``geometry`` (N, 28): axis (0:3), placement rotation row-major (3:12), placement translation
+  (12:15), mass (15), centre of mass (16:19), inertia about it row-major (19:28).
+
+Buffers: ``rot`` (N, 3, 3); ``vec`` (N, 5, 3) = origin, reach r_i = O_i − O_parent, world axis
+e_i, centre-of-mass offset d_i, angular velocity ω_i; ``six`` (N, 5, 6) = U_i, velocity bias
+c_i, bias wrench b_i, twist rate, wrench; ``block`` (N, 2, 6, 6) = M_i, composite /
+articulated M̃_i; ``scal`` (N, 2) = pivot D_i, u_i; ``root`` (7, 6) = the free-flyer's 6×6
+UDUᵀ factor (rows 0–5 U, row 6 D). Conventions and equations as in :mod:`.compiled`
+(Shah & Saha 2013, Eqs. 11–13; Saha's DeNOC; Featherstone's articulated-body algorithm).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from gimwatch.denoc.compiled import add_shift_congruence, cross3
+
+__all__ = [
+    "configure",
+    "forward_dynamics",
+    "gim_diagonal",
+    "gim_product",
+    "gim_solve",
+    "inverse_dynamics",
+]
+
+_ORIGIN, _REACH, _AXIS, _COM, _OMEGA = 0, 1, 2, 3, 4
+_U, _C, _B, _RATE, _WRENCH = 0, 1, 2, 3, 4
+
+
+@njit(cache=True)
+def _root_columns(rotation, out):
+    """P = [[0, R], [R, 0]]: the free-flyer's local (v, ω) to the world twist [ω; v_O]."""
+    out[:] = 0.0
+    for r in range(3):
+        for c in range(3):
+            out[r, 3 + c] = rotation[r, c]
+            out[3 + r, c] = rotation[r, c]
+
+
+@njit(cache=True)
+def _kinematics(q, index, geometry, floating, rot, vec, block):
+    """Poses, reaches, world axes and body mass matrices M_i about O_i (world axes)."""
+    n = index.shape[0]
+    frame = np.empty((3, 3))
+    turn = np.empty((3, 3))
+    for a in range(3):
+        for b in range(3):
+            rot[0, a, b] = 1.0 if a == b else 0.0
+        vec[0, _ORIGIN, a] = 0.0
+        vec[0, _REACH, a] = 0.0
+        vec[0, _AXIS, a] = 0.0
+    if floating:
+        k = index[0, 2]
+        x, y, z, w = q[k + 3], q[k + 4], q[k + 5], q[k + 6]
+        rot[0, 0, 0], rot[0, 0, 1], rot[0, 0, 2] = (
+            1 - 2 * (y * y + z * z),
+            2 * (x * y - z * w),
+            2 * (x * z + y * w),
+        )
+        rot[0, 1, 0], rot[0, 1, 1], rot[0, 1, 2] = (
+            2 * (x * y + z * w),
+            1 - 2 * (x * x + z * z),
+            2 * (y * z - x * w),
+        )
+        rot[0, 2, 0], rot[0, 2, 1], rot[0, 2, 2] = (
+            2 * (x * z - y * w),
+            2 * (y * z + x * w),
+            1 - 2 * (x * x + y * y),
+        )
+        for a in range(3):
+            vec[0, _ORIGIN, a] = q[k + a]
+    for i in range(1, n):
+        j, kind, k = index[i, 0], index[i, 1], index[i, 2]
+        g = geometry[i]
+        for r in range(3):
+            for c in range(3):
+                frame[r, c] = (
+                    rot[j, r, 0] * g[3 + c] + rot[j, r, 1] * g[6 + c] + rot[j, r, 2] * g[9 + c]
+                )
+            vec[i, _REACH, r] = rot[j, r, 0] * g[12] + rot[j, r, 1] * g[13] + rot[j, r, 2] * g[14]
+        for r in range(3):
+            vec[i, _AXIS, r] = frame[r, 0] * g[0] + frame[r, 1] * g[1] + frame[r, 2] * g[2]
+        if kind == 3:
+            rot[i] = frame
+            for r in range(3):
+                vec[i, _REACH, r] += vec[i, _AXIS, r] * q[k]
+        else:
+            if kind == 1:
+                s, c = np.sin(q[k]), np.cos(q[k])
+            else:  # continuous: q holds (cos θ, sin θ)
+                c, s = q[k], q[k + 1]
+            c1 = 1.0 - c
+            x, y, z = g[0], g[1], g[2]
+            # Rodrigues: Rot(a, θ) = 1 + sin θ ã + (1 - cos θ) ã²
+            turn[0, 0] = 1.0 - c1 * (y * y + z * z)
+            turn[1, 1] = 1.0 - c1 * (x * x + z * z)
+            turn[2, 2] = 1.0 - c1 * (x * x + y * y)
+            turn[0, 1] = -s * z + c1 * x * y
+            turn[1, 0] = s * z + c1 * x * y
+            turn[0, 2] = s * y + c1 * x * z
+            turn[2, 0] = -s * y + c1 * x * z
+            turn[1, 2] = -s * x + c1 * y * z
+            turn[2, 1] = s * x + c1 * y * z
+            for r in range(3):
+                for cc in range(3):
+                    rot[i, r, cc] = (
+                        frame[r, 0] * turn[0, cc]
+                        + frame[r, 1] * turn[1, cc]
+                        + frame[r, 2] * turn[2, cc]
+                    )
+        for r in range(3):
+            vec[i, _ORIGIN, r] = vec[j, _ORIGIN, r] + vec[i, _REACH, r]
+    ic = np.empty((3, 3))
+    for i in range(0 if floating else 1, n):
+        g = geometry[i]
+        r = rot[i]
+        for a in range(3):
+            vec[i, _COM, a] = r[a, 0] * g[16] + r[a, 1] * g[17] + r[a, 2] * g[18]
+        for a in range(3):  # I_c = R I Rᵀ
+            for b in range(3):
+                acc = 0.0
+                for kk in range(3):
+                    for mm in range(3):
+                        acc += r[a, kk] * g[19 + 3 * kk + mm] * r[b, mm]
+                ic[a, b] = acc
+        m = g[15]
+        d = vec[i, _COM]
+        dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+        out = block[i, 0]
+        out[:] = 0.0
+        for a in range(3):
+            for b in range(3):
+                out[a, b] = ic[a, b] + m * ((dd if a == b else 0.0) - d[a] * d[b])
+            out[3 + a, 3 + a] = m
+        out[0, 4], out[0, 5] = -m * d[2], m * d[1]
+        out[1, 3], out[1, 5] = m * d[2], -m * d[0]
+        out[2, 3], out[2, 4] = -m * d[1], m * d[0]
+        for a in range(3):
+            for b in range(3):
+                out[3 + a, b] = out[b, 3 + a]
+
+
+@njit(cache=True, inline="always")
+def _column(kind, e, x, out6):
+    """out6 = p_i x: [e x; 0] (revolute, continuous) or [0; e x] (prismatic)."""
+    k = 3 if kind == 3 else 0
+    for a in range(6):
+        out6[a] = 0.0
+    out6[k], out6[k + 1], out6[k + 2] = e[0] * x, e[1] * x, e[2] * x
+
+
+@njit(cache=True, inline="always")
+def _p_dot(kind, e, vector6):
+    """p_iᵀ x for a 6-vector x."""
+    k = 3 if kind == 3 else 0
+    return e[0] * vector6[k] + e[1] * vector6[k + 1] + e[2] * vector6[k + 2]
+
+
+@njit(cache=True, inline="always")
+def _shift_rate(parent_rate, r, out):
+    """Out = A parent_rate: [α; a_O] moved by r (a_O' = a_O + α × r)."""
+    out[0], out[1], out[2] = parent_rate[0], parent_rate[1], parent_rate[2]
+    out[3] = parent_rate[3] + parent_rate[1] * r[2] - parent_rate[2] * r[1]
+    out[4] = parent_rate[4] + parent_rate[2] * r[0] - parent_rate[0] * r[2]
+    out[5] = parent_rate[5] + parent_rate[0] * r[1] - parent_rate[1] * r[0]
+
+
+@njit(cache=True, inline="always")
+def _add_shifted_wrench(target, w, r):
+    """Target += Aᵀ w: the wrench [n; f] at O + r added at O (n' = n + r × f)."""
+    target[0] += w[0] + r[1] * w[5] - r[2] * w[4]
+    target[1] += w[1] + r[2] * w[3] - r[0] * w[5]
+    target[2] += w[2] + r[0] * w[4] - r[1] * w[3]
+    target[3] += w[3]
+    target[4] += w[4]
+    target[5] += w[5]
+
+
+@njit(cache=True)
+def _root_system(rotation, articulated, columns, out):
+    """Pᵀ X P (6×6) for the free-flyer's columns P."""
+    _root_columns(rotation, columns)
+    for a in range(6):
+        for b in range(6):
+            acc = 0.0
+            for r in range(6):
+                if columns[r, a] != 0.0:
+                    for s in range(6):
+                        acc += columns[r, a] * articulated[r, s] * columns[s, b]
+            out[a, b] = acc
+
+
+@njit(cache=True)
+def _udut6(matrix, root):
+    """UDUᵀ of a 6×6 (elimination from the last coordinate) into root[:6] (U) and root[6] (D)."""
+    work = matrix.copy()
+    for k in range(5, -1, -1):
+        pivot = work[k, k]
+        root[6, k] = pivot
+        for i in range(6):
+            root[i, k] = 0.0 if i > k else (1.0 if i == k else work[i, k] / pivot)
+        for a in range(k):
+            for b in range(k):
+                work[a, b] -= work[a, k] * work[b, k] / pivot
+
+
+@njit(cache=True)
+def _solve6(root, rhs, out):
+    """Out = (U D Uᵀ)⁻¹ rhs with the factor of :func:`_udut6`."""
+    z = np.empty(6)
+    for i in range(5, -1, -1):
+        acc = rhs[i]
+        for k in range(i + 1, 6):
+            acc -= root[i, k] * z[k]
+        z[i] = acc
+    for i in range(6):
+        acc = z[i] / root[6, i]
+        for k in range(i):
+            acc -= root[k, i] * out[k]
+        out[i] = acc
+
+
+@njit(cache=True, error_model="numpy")
+def _factor(index, floating, rot, vec, block, six, scal, root):
+    """Articulated-body factor from the tips: U_i = IA_i p_i, D_i = p_iᵀ U_i, IA passed on.
+
+    With a floating base the free-flyer's 6×6 system Pᵀ IA_0 P is factored too (UDUᵀ).
+    Returns whether every pivot is positive (False: M(q) is singular).
+    """
+    n = index.shape[0]
+    for i in range(0 if floating else 1, n):
+        block[i, 1] = block[i, 0]
+    scratch = np.empty((3, 3))
+    ok = True
+    for i in range(n - 1, 0, -1):
+        kind = index[i, 1]
+        e = vec[i, _AXIS]
+        k = 3 if kind == 3 else 0
+        art = block[i, 1]
+        u = six[i, _U]
+        for a in range(6):
+            u[a] = art[a, k] * e[0] + art[a, k + 1] * e[1] + art[a, k + 2] * e[2]
+        pivot = _p_dot(kind, e, u)
+        scal[i, 0] = pivot
+        ok = ok and pivot > 0.0
+        j = index[i, 0]
+        if j > 0 or floating:
+            for a in range(6):
+                for b in range(6):
+                    art[a, b] -= u[a] * u[b] / pivot
+            add_shift_congruence(block[j, 1], art, vec[i, _REACH], scratch)
+    if floating:
+        system = np.empty((6, 6))
+        columns = np.empty((6, 6))
+        _root_system(rot[0], block[0, 1], columns, system)
+        _udut6(system, root)
+        for k in range(6):
+            ok = ok and root[6, k] > 0.0
+    return ok
+
+
+@njit(cache=True)
+def _velocity_terms(v, index, geometry, floating, rot, vec, six):
+    """ω_i, the twist-rate bias c_i and the bias wrench b_i of every body; False when v = 0.
+
+    c_i = [ω_j × e_i q̇_i; ω_j × (ω_j × r_i)] (revolute) or [0; ω_j × (ω_j × r_i) +
+    2 ω_j × e_i q̇_i] (prismatic); the free-flyer's c_0 = [0; ω_0 × v_0]; b_i = [ω × I_c ω +
+    d × f_b; f_b] with f_b = m ω × (ω × d).
+    """
+    n = index.shape[0]
+    moving = False
+    for k in range(v.shape[0]):
+        if v[k] != 0.0:
+            moving = True
+            break
+    if not moving:
+        return False
+    t1 = np.empty(3)
+    t2 = np.empty(3)
+    local = np.empty(3)
+    for a in range(3):
+        vec[0, _OMEGA, a] = 0.0
+    for a in range(6):
+        six[0, _C, a] = 0.0
+    if floating:
+        k = index[0, 3]
+        r0 = rot[0]
+        for a in range(3):
+            vec[0, _OMEGA, a] = r0[a, 0] * v[k + 3] + r0[a, 1] * v[k + 4] + r0[a, 2] * v[k + 5]
+            t2[a] = r0[a, 0] * v[k] + r0[a, 1] * v[k + 1] + r0[a, 2] * v[k + 2]
+        cross3(vec[0, _OMEGA], t2, t1)
+        for a in range(3):
+            six[0, _C, 3 + a] = t1[a]
+    for i in range(1, n):
+        j, kind = index[i, 0], index[i, 1]
+        qd = v[index[i, 3]]
+        w0 = vec[j, _OMEGA]
+        e = vec[i, _AXIS]
+        cross3(w0, vec[i, _REACH], t1)
+        cross3(w0, t1, t2)  # ω_j × (ω_j × r)
+        cross3(w0, e, t1)  # ω_j × e_i
+        c = six[i, _C]
+        for a in range(3):
+            c[3 + a] = t2[a]
+            if kind == 3:
+                vec[i, _OMEGA, a] = w0[a]
+                c[a] = 0.0
+                c[3 + a] += 2.0 * t1[a] * qd
+            else:
+                vec[i, _OMEGA, a] = w0[a] + e[a] * qd
+                c[a] = t1[a] * qd
+    for i in range(0 if floating else 1, n):
+        g = geometry[i]
+        w = vec[i, _OMEGA]
+        d = vec[i, _COM]
+        b = six[i, _B]
+        cross3(w, d, t1)
+        cross3(w, t1, t2)
+        for a in range(3):
+            b[3 + a] = g[15] * t2[a]
+        r = rot[i]
+        for a in range(3):
+            t1[a] = r[0, a] * w[0] + r[1, a] * w[1] + r[2, a] * w[2]
+        for a in range(3):
+            local[a] = g[19 + 3 * a] * t1[0] + g[20 + 3 * a] * t1[1] + g[21 + 3 * a] * t1[2]
+        for a in range(3):
+            t1[a] = r[a, 0] * local[0] + r[a, 1] * local[1] + r[a, 2] * local[2]
+        cross3(w, t1, t2)
+        cross3(d, b[3:], t1)
+        for a in range(3):
+            b[a] = t2[a] + t1[a]
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out):
+    """q̈ = M⁻¹ (τ − C q̇ + g) on the factor: bias wrenches from the tips, q̈ from the root."""
+    n = index.shape[0]
+    wrench = np.empty(6)
+    for i in range(n):
+        for a in range(6):
+            six[i, _WRENCH, a] = six[i, _B, a] if moving else 0.0
+    for i in range(n - 1, 0, -1):
+        kind = index[i, 1]
+        u = tau[index[i, 3]] - _p_dot(kind, vec[i, _AXIS], six[i, _WRENCH])
+        scal[i, 1] = u
+        j = index[i, 0]
+        if j > 0 or floating:
+            scale = u / scal[i, 0]
+            for a in range(6):
+                acc = six[i, _WRENCH, a] + six[i, _U, a] * scale
+                if moving:
+                    for b in range(6):
+                        acc += block[i, 1, a, b] * six[i, _C, b]
+                wrench[a] = acc
+            _add_shifted_wrench(six[j, _WRENCH], wrench, vec[i, _REACH])
+    rate0 = six[0, _RATE]
+    for a in range(3):
+        rate0[a] = 0.0
+        rate0[3 + a] = -gravity[a]
+    if floating:
+        k = index[0, 3]
+        if moving:
+            for a in range(6):
+                rate0[a] += six[0, _C, a]
+        columns = np.empty((6, 6))
+        _root_columns(rot[0], columns)
+        rhs = np.empty(6)
+        for a in range(6):  # IA_0 rate0 + pA_0
+            acc = six[0, _WRENCH, a]
+            for b in range(6):
+                acc += block[0, 1, a, b] * rate0[b]
+            wrench[a] = acc
+        for a in range(6):
+            acc = tau[k + a]
+            for r in range(6):
+                acc -= columns[r, a] * wrench[r]
+            rhs[a] = acc
+        accel = np.empty(6)
+        _solve6(root, rhs, accel)
+        for a in range(6):
+            out[k + a] = accel[a]
+            for b in range(6):
+                rate0[a] += columns[a, b] * accel[b]
+    for i in range(1, n):
+        j, kind = index[i, 0], index[i, 1]
+        rate = six[i, _RATE]
+        _shift_rate(six[j, _RATE], vec[i, _REACH], rate)
+        if moving:
+            for a in range(6):
+                rate[a] += six[i, _C, a]
+        dot = 0.0
+        for a in range(6):
+            dot += six[i, _U, a] * rate[a]
+        x = (scal[i, 1] - dot) / scal[i, 0]
+        out[index[i, 3]] = x
+        kk = 3 if kind == 3 else 0
+        e = vec[i, _AXIS]
+        for a in range(3):
+            rate[kk + a] += e[a] * x
+
+
+@njit(cache=True)
+def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, six, out):
+    """τ = M q̈ + C q̇ − g: twist rates from the root, wrenches w_i = M_i ṫ_i + b_i summed back."""
+    n = index.shape[0]
+    rate0 = six[0, _RATE]
+    for a in range(3):
+        rate0[a] = 0.0
+        rate0[3 + a] = -gravity[a]
+    columns = np.empty((6, 6))
+    if floating:
+        k = index[0, 3]
+        _root_columns(rot[0], columns)
+        for a in range(6):
+            s = six[0, _C, a] if moving else 0.0
+            for b in range(6):
+                s += columns[a, b] * acc[k + b]
+            rate0[a] += s
+    for i in range(1, n):
+        j, kind = index[i, 0], index[i, 1]
+        rate = six[i, _RATE]
+        _shift_rate(six[j, _RATE], vec[i, _REACH], rate)
+        x = acc[index[i, 3]]
+        kk = 3 if kind == 3 else 0
+        e = vec[i, _AXIS]
+        for a in range(3):
+            rate[kk + a] += e[a] * x
+        if moving:
+            for a in range(6):
+                rate[a] += six[i, _C, a]
+    for i in range(0 if floating else 1, n):
+        m = block[i, 0]
+        rate = six[i, _RATE]
+        for a in range(6):
+            s = six[i, _B, a] if moving else 0.0
+            for b in range(6):
+                s += m[a, b] * rate[b]
+            six[i, _WRENCH, a] = s
+    for i in range(n - 1, 0, -1):
+        out[index[i, 3]] = _p_dot(index[i, 1], vec[i, _AXIS], six[i, _WRENCH])
+        j = index[i, 0]
+        if j > 0 or floating:
+            _add_shifted_wrench(six[j, _WRENCH], six[i, _WRENCH], vec[i, _REACH])
+    if floating:
+        k = index[0, 3]
+        for a in range(6):
+            s = 0.0
+            for r in range(6):
+                s += columns[r, a] * six[0, _WRENCH, r]
+            out[k + a] = s
+
+
+# -- entry points: one compiled call per operation ----------------------------------------
+
+
+@njit(cache=True, error_model="numpy")  # a zero diagonal entry gives δ = inf, not an error
+def gim_diagonal(q, index, geometry, floating, rot, vec, block, out):
+    """Diag M(q) = p_iᵀ M̃_i p_i (Shah & Saha 2013, Eqs. 11–13) into ``out``, O(n).
+
+    Returns δ = max M_ii / min M_ii (Sec. 4), so that a watch needs nothing else.
+    """
+    _kinematics(q, index, geometry, floating, rot, vec, block)
+    n = index.shape[0]
+    for i in range(0 if floating else 1, n):
+        block[i, 1] = block[i, 0]
+    scratch = np.empty((3, 3))
+    column = np.empty(6)
+    for i in range(n - 1, 0, -1):
+        kind = index[i, 1]
+        e = vec[i, _AXIS]
+        k = 3 if kind == 3 else 0
+        comp = block[i, 1]
+        for a in range(6):
+            column[a] = comp[a, k] * e[0] + comp[a, k + 1] * e[1] + comp[a, k + 2] * e[2]
+        out[index[i, 3]] = _p_dot(kind, e, column)
+        j = index[i, 0]
+        if j > 0 or floating:
+            add_shift_congruence(block[j, 1], comp, vec[i, _REACH], scratch)
+    if floating:
+        system = np.empty((6, 6))
+        columns = np.empty((6, 6))
+        _root_system(rot[0], block[0, 1], columns, system)
+        k = index[0, 3]
+        for a in range(6):
+            out[k + a] = system[a, a]
+    largest, smallest = out[0], out[0]
+    for k in range(out.shape[0]):
+        largest = max(largest, out[k])
+        smallest = min(smallest, out[k])
+    return largest / smallest
+
+
+@njit(cache=True)
+def configure(q, index, geometry, floating, rot, vec, block, six, scal, root):
+    """Kinematics, body mass matrices and the articulated factor at q, for the products.
+
+    Returns whether M(q) is positive definite (every pivot > 0).
+    """
+    _kinematics(q, index, geometry, floating, rot, vec, block)
+    return _factor(index, floating, rot, vec, block, six, scal, root)
+
+
+@njit(cache=True)
+def gim_product(x, index, floating, rot, vec, block, six, out):
+    """M(q) x at the configured q (Newton–Euler from rest, no gravity), O(n)."""
+    _newton_euler_pass(x, np.zeros(3), False, floating, index, rot, vec, block, six, out)
+
+
+@njit(cache=True)
+def gim_solve(y, index, floating, rot, vec, block, six, scal, root, out):
+    """M(q)⁻¹ y at the configured q (articulated bodies from rest, no gravity), O(n)."""
+    _articulated_pass(y, np.zeros(3), False, floating, index, rot, vec, block, six, scal, root, out)
+
+
+@njit(cache=True)
+def forward_dynamics(
+    q, v, tau, gravity, index, geometry, floating, rot, vec, block, six, scal, root, out
+):
+    """q̈ = M(q)⁻¹ (τ − C(q, q̇) q̇ + g(q)) into ``out``; False when M(q) is singular."""
+    _kinematics(q, index, geometry, floating, rot, vec, block)
+    ok = _factor(index, floating, rot, vec, block, six, scal, root)
+    moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
+    _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out)
+    return ok
+
+
+@njit(cache=True)
+def inverse_dynamics(q, v, a, gravity, index, geometry, floating, rot, vec, block, six, out):
+    """τ = M(q) q̈ + C(q, q̇) q̇ − g(q) into ``out`` (Saha's DeNOC inverse dynamics)."""
+    _kinematics(q, index, geometry, floating, rot, vec, block)
+    moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
+    _newton_euler_pass(a, gravity, moving, floating, index, rot, vec, block, six, out)

@@ -1,0 +1,220 @@
+"""`LeanModel`: DeNOC's O(n) operations at one compiled call each, with preallocated buffers.
+
+:class:`~gimwatch.denoc.model.DenocModel` checks every argument and builds a fresh state per
+call; that is right for a cross-check, but in a simulation loop or a watch sampled every
+step the checks and the allocations cost more than the recursions (22 µs for one δ sample
+of a 20-link chain, 4× a Pinocchio ``aba`` call). A :class:`LeanModel` packs the tree once
+and keeps the workspace; each method below is exactly one call into :mod:`.fused` and
+nothing else, for fixed and floating bases alike, in Pinocchio's coordinate order.
+
+Arguments are NOT checked (shapes, finiteness): the caller owns that, as with Pinocchio's
+own Python bindings. Results are written into ``out`` when given (no allocation at all),
+else into a new array. The buffers make a LeanModel single-threaded: one per thread.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gimwatch.denoc import fused
+from gimwatch.denoc.tree import BodyTree
+from gimwatch.errors import ConditioningError
+
+__all__ = ["LeanModel"]
+
+_ZERO_GRAVITY = np.zeros(3)
+
+
+class LeanModel:
+    """The compiled DeNOC recursions of one body tree with their buffers.
+
+    Build it with :meth:`gimwatch.denoc.DenocModel.lean` (which knows the coordinate order).
+
+    Args:
+        tree: The body tree.
+        q_index: Per body, the index of its first q entry (body 0: the free-flyer's).
+        v_index: Per body, the index of its v entry (body 0: the first of the free-flyer's six).
+        nq: Length of q.
+        nv: Length of v.
+    """
+
+    def __init__(
+        self, tree: BodyTree, q_index: np.ndarray, v_index: np.ndarray, nq: int, nv: int
+    ) -> None:
+        n = tree.size
+        self.tree, self.nq, self.nv, self.floating = tree, int(nq), int(nv), bool(tree.floating)
+        self._index = np.ascontiguousarray(
+            np.column_stack([tree.parent, tree.kind, q_index, v_index]), dtype=np.int64
+        )
+        self._geometry = np.ascontiguousarray(
+            np.column_stack(
+                [
+                    tree.axis,
+                    tree.placement_rotation.reshape(n, 9),
+                    tree.placement_translation,
+                    tree.mass,
+                    tree.com,
+                    tree.inertia.reshape(n, 9),
+                ]
+            ),
+            dtype=float,
+        )
+        self._rot = np.zeros((n, 3, 3))
+        self._vec = np.zeros((n, 5, 3))
+        self._six = np.zeros((n, 5, 6))
+        self._block = np.zeros((n, 2, 6, 6))
+        self._scal = np.ones((n, 2))
+        self._root = np.ones((7, 6))
+        self._diag = np.empty(self.nv)
+        self._configured = False
+
+    def gim_diagonal(self, q: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Diag M(q) (Shah & Saha 2013, Eqs. 11–13), O(n), one compiled call."""
+        out = np.empty(self.nv) if out is None else out
+        fused.gim_diagonal(
+            q, self._index, self._geometry, self.floating, self._rot, self._vec, self._block, out
+        )
+        return out
+
+    def diagonal_ratio(self, q: np.ndarray) -> float:
+        """δ = max M_ii / min M_ii (Sec. 4) at q, O(n)."""
+        return float(
+            fused.gim_diagonal(
+                q,
+                self._index,
+                self._geometry,
+                self.floating,
+                self._rot,
+                self._vec,
+                self._block,
+                self._diag,
+            )
+        )
+
+    def configure(self, q: np.ndarray) -> None:
+        """Set the configuration of :meth:`gim_product` and :meth:`gim_solve` (O(n) factor).
+
+        Raises:
+            ConditioningError: M(q) is singular (a pivot is not positive).
+        """
+        ok = fused.configure(
+            q,
+            self._index,
+            self._geometry,
+            self.floating,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            self._scal,
+            self._root,
+        )
+        self._configured = bool(ok)
+        if not ok:
+            raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
+
+    def compiled_operator_arguments(self) -> tuple:
+        """The buffers the compiled products read after :meth:`configure`.
+
+        :func:`.fused.gim_product` and :func:`.fused.gim_solve` take them after x and before
+        out: (index, floating, rot, vec, block, six, scal, root). For compiled callers (the
+        κ tracker's Krylov loop) that call the products directly.
+        """
+        return (
+            self._index,
+            self.floating,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            self._scal,
+            self._root,
+        )
+
+    def gim_product(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """M(q) x at the configured q, O(n)."""
+        out = np.empty(self.nv) if out is None else out
+        fused.gim_product(
+            x, self._index, self.floating, self._rot, self._vec, self._block, self._six, out
+        )
+        return out
+
+    def gim_solve(self, y: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """M(q)⁻¹ y at the configured q, O(n)."""
+        out = np.empty(self.nv) if out is None else out
+        fused.gim_solve(
+            y,
+            self._index,
+            self.floating,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            self._scal,
+            self._root,
+            out,
+        )
+        return out
+
+    def forward_dynamics(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        tau: np.ndarray,
+        gravity: np.ndarray = _ZERO_GRAVITY,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """q̈ = M(q)⁻¹ (τ − C(q, v) v + g(q)), O(n); leaves the model configured at q.
+
+        Raises:
+            ConditioningError: M(q) is singular (a pivot is not positive).
+        """
+        out = np.empty(self.nv) if out is None else out
+        ok = fused.forward_dynamics(
+            q,
+            v,
+            tau,
+            gravity,
+            self._index,
+            self._geometry,
+            self.floating,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            self._scal,
+            self._root,
+            out,
+        )
+        if not ok:
+            self._configured = False
+            raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
+        self._configured = True
+        return out
+
+    def inverse_dynamics(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        a: np.ndarray,
+        gravity: np.ndarray = _ZERO_GRAVITY,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """τ = M(q) a + C(q, v) v − g(q), O(n) (Saha's DeNOC inverse dynamics)."""
+        out = np.empty(self.nv) if out is None else out
+        fused.inverse_dynamics(
+            q,
+            v,
+            a,
+            gravity,
+            self._index,
+            self._geometry,
+            self.floating,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            out,
+        )
+        self._configured = False  # the factor is not recomputed by inverse dynamics
+        return out

@@ -1,0 +1,219 @@
+"""The κ tracker against dense eigen-solves (NumPy, Pinocchio's M⁻¹, mpmath) along trajectories."""
+
+import dataclasses
+from pathlib import Path
+
+import mpmath
+import numpy as np
+import pinocchio as pin
+import pytest
+from threadpoolctl import threadpool_limits
+
+from gimwatch.crosscheck import denoc_model
+from gimwatch.denoc import DenocModel
+from gimwatch.errors import ConditioningError
+from gimwatch.metrics.tracker import KappaTracker, track_kappa
+from gimwatch.metrics.tracker_providers import PinocchioProducts
+from gimwatch.model.chains import chain_spec
+from gimwatch.model.robots import load_robot
+from gimwatch.simulation.scene import load_scene, parse_scene
+from gimwatch.simulation.simulate import run_scene
+from gimwatch.stress.reference_planar import PlanarChainReference
+
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+RTOL = 1e-8  # issue 16: the tracker matches dense κ within 1e-8 relative at every sample
+
+
+def _paper_trajectory(n: int) -> np.ndarray:
+    """q at every sample of the paper's swinging chain scene (δ watched only: cheap)."""
+    scene = load_scene(SCENES / f"chain_{n}.toml")
+    watch = dataclasses.replace(
+        scene.watch, metrics=("diagonal_ratio",), alarm_metric=None, alarm_threshold=None
+    )
+    return run_scene(dataclasses.replace(scene, watch=watch)).q
+
+
+def _swinging(n: int, duration: float, sample: float) -> np.ndarray:
+    scene = parse_scene(
+        {
+            "robot": f"chain:{n}",
+            "duration": duration,
+            "sample": sample,
+            "effects": {"gravity": {"vector": [0.0, -9.81, 0.0]}},
+            "integrator": {"method": "RK4", "dt": 1e-3},
+            "dynamics": {"backend": "denoc"},
+            "watch": {"metrics": ["diagonal_ratio"]},
+        },
+        source=f"<swinging chain:{n}>",
+    )
+    return run_scene(scene).q
+
+
+@pytest.mark.parametrize("n", [4, 10, 20])
+def test_tracker_matches_dense_kappa_along_the_paper_trajectories(n):
+    robot = load_robot(f"chain:{n}")
+    data = robot.new_data()
+    qs = _paper_trajectory(n)
+    results = track_kappa(denoc_model(robot).lean(), qs)
+    with threadpool_limits(1, "blas"):
+        dense = np.array([np.linalg.eigvalsh(pin.crba(robot.model, data, q))[[0, -1]] for q in qs])
+    kappa = dense[:, 1] / dense[:, 0]
+    tracked = np.array([r.kappa for r in results])
+    error = np.abs(tracked - kappa) / kappa
+    assert error.max() <= RTOL, f"max relative error {error.max():.2e} at sample {error.argmax()}"
+    assert len(results) == len(qs) > 400
+    assert results[0].fallback == "start"
+    warm = [r for r in results[1:] if r.fallback == ""]
+    assert len(warm) >= 0.95 * (len(results) - 1)  # the warm start is the rule
+    # products per sample are reported and add up
+    assert all(r.products == r.products_max + r.products_min > 0 for r in results)
+
+
+def test_tracker_matches_mpmath_on_a_50_link_chain():
+    """κ ≈ 2.5e7: float64's eigvalsh loses λmin's digits (eps·κ ≈ 6e-9); mpmath does not."""
+    n = 50
+    qs = _swinging(n, 0.3, 0.1)
+    lean = DenocModel.from_chain(chain_spec(n)).lean()
+    results = track_kappa(lean, qs)
+    reference = PlanarChainReference(chain_spec(n), dps=30)
+    for q, result in zip(qs[::2], results[::2], strict=True):
+        with mpmath.workdps(30):
+            values = mpmath.eigsy(reference.gim(q), eigvals_only=True)
+            values = sorted(float(x) for x in values)
+        kappa = values[-1] / values[0]
+        assert abs(result.kappa - kappa) / kappa <= RTOL, (result.kappa, kappa)
+
+
+def test_tracker_matches_dense_along_a_200_link_swinging_chain():
+    """λmax against eigvalsh of CRBA's M, λmin against eigvalsh of Pinocchio's M⁻¹.
+
+    κ ≈ 6e9: the dense λmin of M carries eps·κ ≈ 1e-6 relative error, the largest
+    eigenvalue of M⁻¹ (computeMinverse) only about eps, so both ends are compared where
+    float64 resolves them.
+    """
+    n = 200
+    robot = load_robot(f"chain:{n}")
+    data = robot.new_data()
+    qs = _swinging(n, 0.4, 0.05)
+    tracker = KappaTracker(denoc_model(robot).lean(), robot.nv)
+    with threadpool_limits(1, "blas"):
+        for q in qs:
+            result = tracker.sample(q)
+            top = np.linalg.eigvalsh(pin.crba(robot.model, data, q))[-1]
+            inverse = np.linalg.eigvalsh(pin.computeMinverse(robot.model, data, q))[-1]
+            kappa = top * inverse
+            assert abs(result.kappa - kappa) / kappa <= RTOL, (result.kappa, kappa)
+            assert abs(result.lambda_max - top) / top <= RTOL
+            assert abs(result.lambda_min * inverse - 1) <= RTOL
+    assert result.kappa > 1e9
+
+
+def test_pinocchio_products_give_the_same_kappa():
+    robot = load_robot("ur5")
+    qs = np.linspace(0.0, 1.0, 5)[:, None] * np.linspace(-1, 1, robot.nq)[None, :]
+    ours = track_kappa(denoc_model(robot).lean(), qs)
+    theirs = track_kappa(PinocchioProducts(robot), qs)
+    for a, b in zip(ours, theirs, strict=True):
+        assert a.kappa == pytest.approx(b.kappa, rel=1e-8)
+
+
+class _Diagonalised:
+    """M(t) = Q diag(λ(t)) Qᵀ with a chosen spectrum: the products, and the dense matrix."""
+
+    def __init__(self, n: int, seed: int = 0) -> None:
+        self.nv = n
+        self.Q = np.linalg.qr(np.random.default_rng(seed).standard_normal((n, n)))[0]
+        self.values = np.ones(n)
+
+    def matrix(self, values) -> np.ndarray:
+        return (self.Q * values) @ self.Q.T
+
+    def configure(self, values) -> None:
+        self.M = self.matrix(values)
+        self.Minv = (self.Q / values) @ self.Q.T
+
+    def gim_product(self, x):
+        return self.M @ x
+
+    def gim_solve(self, y):
+        return self.Minv @ y
+
+
+def _spectrum(n: int, top: float, second: float, low: float) -> np.ndarray:
+    values = np.linspace(2.0, 5.0, n)
+    values[-1], values[-2], values[0] = top, second, low
+    return values
+
+
+def test_eigenvalue_crossing_is_tracked():
+    """The two leading eigenvalues swap (their eigenvectors too): Rayleigh–Ritz on the block."""
+    n = 60
+    op = _Diagonalised(n)
+    tracker = KappaTracker(op, n, rtol=1e-12)
+    for t in np.linspace(0.0, 1.0, 11):
+        values = _spectrum(n, 10.0 + t, 11.0 - t, 0.5)  # cross at t = 0.5
+        result = tracker.sample(values)
+        expected = values.max() / values.min()
+        assert result.kappa == pytest.approx(expected, rel=1e-9)
+
+
+def test_sudden_jump_is_detected_and_recovered():
+    """A new leading eigenvalue far above the tracked one, along an eigenvector the warm
+    block is orthogonal to: the warm start cannot see it; the probe's residual and the jump
+    rule send the sample to the cold start, which finds it."""
+    n = 80
+    op = _Diagonalised(n)
+    tracker = KappaTracker(op, n)
+    values = _spectrum(n, 10.0, 9.0, 0.5)
+    for _ in range(3):
+        assert tracker.sample(values).fallback in ("", "start")
+    jumped = values.copy()
+    jumped[5] = 1000.0  # eigenvector Q[:, 5]: orthogonal to the tracked ones
+    result = tracker.sample(jumped)
+    assert result.fallback == "cold"
+    assert result.kappa == pytest.approx(1000.0 / 0.5, rel=1e-9)
+    assert tracker.sample(jumped).fallback == ""  # warm again afterwards
+
+
+def test_dense_fallback_when_the_cold_start_cannot_converge():
+    n = 40
+    op = _Diagonalised(n)
+    values = _spectrum(n, 10.0, 9.0, 0.5)
+    tracker = KappaTracker(op, n, warm_products=2, max_products=3, dense=lambda v: op.matrix(v))
+    result = tracker.sample(values)
+    assert result.fallback == "dense"
+    assert result.kappa == pytest.approx(20.0, rel=1e-12)
+    without = KappaTracker(op, n, warm_products=2, max_products=3)
+    with pytest.raises(ConditioningError, match="did not converge in 3 products"):
+        without.sample(values)
+
+
+@pytest.mark.parametrize("backend", ["aba", "denoc"])
+def test_watch_metric_kappa_tracked_equals_kappa(backend):
+    table = {
+        "robot": "chain:6",
+        "duration": 0.5,
+        "sample": 0.05,
+        "effects": {"gravity": {"vector": [0.0, -9.81, 0.0]}},
+        "integrator": {"method": "RK4", "dt": 0.01},
+        "dynamics": {"backend": backend},
+        "watch": {"metrics": ["kappa", "kappa_tracked"]},
+    }
+    run = run_scene(parse_scene(table, source="t.toml"))
+    np.testing.assert_allclose(
+        run.watch["watch_kappa_tracked"], run.watch["watch_kappa"], rtol=RTOL, atol=0
+    )
+
+
+def test_watch_metric_on_a_floating_base_uses_the_compiled_products():
+    from gimwatch.metrics.watch import Watch
+
+    robot = load_robot("solo12", floating=True)
+    watch = Watch(robot, ("kappa", "kappa_tracked"))
+    q = pin.neutral(robot.model)
+    for k in range(3):
+        q = q.copy()
+        q[7:] += 0.05 * k
+        watch.sample(0.1 * k, q)
+    np.testing.assert_allclose(watch.series["kappa_tracked"], watch.series["kappa"], rtol=RTOL)
+    assert all(p > 0 for p in watch.metrics["kappa_tracked"].products)
