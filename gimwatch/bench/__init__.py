@@ -58,7 +58,7 @@ class SectionResult:
         tables: The fixed-column tables (written as ``<name>.csv`` and ``<name>.json``).
         figures: PNG files written into the output folder.
         markdown: The section's report text (headline tables and conclusions).
-        headline: A shorter text for the README's "What accuracy costs" section.
+        headline: A shorter text for the docs page "What accuracy costs".
         summary: Key figures for ``summary.json`` (ratios, acceptance checks).
     """
 

@@ -1,4 +1,4 @@
-"""Write the benchmark's files: fixed-column CSV/JSON, ``report.md``, ``summary.json``, README.
+"""Write the benchmark's files: fixed-column CSV/JSON, ``report.md``, ``summary.json``, docs block.
 
 The report is headed by what makes numbers comparable: the versions of gimwatch, Pinocchio,
 NumPy, SciPy and mpmath, the date, the CPU model and the BLAS thread settings, plus the

@@ -19,7 +19,7 @@ HELP = "simulate a scene (TOML) and watch the conditioning of M(q)"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("scene", help="scene file (TOML); see the README for the schema")
+    parser.add_argument("scene", help="scene file (TOML); the format: docs/guide/simulate.md")
     parser.add_argument(
         "-o", "--output", help="results folder (default: results/<scene name> next to the cwd)"
     )

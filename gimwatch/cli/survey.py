@@ -42,7 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--workers",
         type=positive_int,
         metavar="N",
-        help="local processes when no --scheduler (default: every core; 1: in this process)",
+        help="local processes when no --scheduler; 1: in this process (default: this process "
+        "for small surveys, every core for larger ones)",
     )
     parser.add_argument(
         "--chunk-size", type=positive_int, default=50, metavar="N", help="samples per task"

@@ -4,7 +4,8 @@ A scene is a TOML file read with :mod:`tomllib` and validated once, into frozen
 dataclasses. Unknown keys, wrong types, wrong lengths, negative durations, unknown effect,
 metric, joint or link names are :class:`~gimwatch.errors.SceneError` naming the file and
 the key (``scene.toml: effects.spring.stiffness: ...``). The schema is documented in the
-README ("Scenes"); :data:`EFFECT_KEYS` and :data:`METRIC_NAMES` are the registries' names.
+docs (``docs/guide/simulate.md``); :data:`EFFECT_KEYS` and :data:`METRIC_NAMES` are the
+registries' names.
 
 Joint-indexed values (``q``, ``v``, damping, stiffness, torques, targets) are given as a
 number (broadcast to every coordinate), a list (one per coordinate) or a table keyed by
