@@ -224,6 +224,38 @@ MUTANTS = (
         ("tests/test_inertia.py",),
         "parallel-axis term of the O(n) Pinocchio diagonal off by 1e-3",
     ),
+    Mutant(
+        "ldlt-pivots-not-squared",
+        "gimwatch/metrics/conditioning.py",
+        "return np.diag(_cholesky_lower(M)) ** 2\n",
+        "return np.diag(_cholesky_lower(M))\n",
+        ("tests/test_conditioning.py",),
+        "forward pivots are the Cholesky diagonal, not its square",
+    ),
+    Mutant(
+        "symmetry-check-loose",
+        "gimwatch/metrics/conditioning.py",
+        "SYMMETRY_RTOL = 1e-10",
+        "SYMMETRY_RTOL = 1e-2",
+        ("tests/test_conditioning.py",),
+        "a GIM asymmetric at 1e-3 is accepted",
+    ),
+    Mutant(
+        "estimator-alpha-second-sample",
+        "gimwatch/metrics/watch.py",
+        "alpha = kappa[0] / delta[0]",
+        "alpha = kappa[1] / delta[1]",
+        ("tests/test_watch.py",),
+        "α of the estimator quality from the second sample, not t0",
+    ),
+    Mutant(
+        "planar-reference-gravity-sign",
+        "gimwatch/stress/reference_planar.py",
+        "bias.append(h - (-gx * mp.sin(phi[a]) + gy * mp.cos(phi[a])) * lever)",
+        "bias.append(h + (-gx * mp.sin(phi[a]) + gy * mp.cos(phi[a])) * lever)",
+        ("tests/test_reference.py",),
+        "gravity torque of the planar reference with the wrong sign",
+    ),
     # --- energy and drift ---
     Mutant(
         "drift-always-zero",
@@ -257,6 +289,14 @@ MUTANTS = (
         ("tests/test_simulate.py", "-k", "converge"),
         "RK4's third stage from the first slope (order drops)",
     ),
+    Mutant(
+        "denoc-potential-sign",
+        "gimwatch/denoc/model.py",
+        "potential = -float(self.linear._mass @",
+        "potential = float(self.linear._mass @",
+        LONG,
+        "DeNOC's gravity potential with the wrong sign",
+    ),
     # --- Lanczos ---
     Mutant(
         "lanczos-stops-at-1e-3",
@@ -282,6 +322,22 @@ MUTANTS = (
         ("tests/test_matrix_free.py",),
         "ARPACK stopping at 1e-3",
     ),
+    Mutant(
+        "lanczos-two-term",
+        "gimwatch/denoc/linear.py",
+        "w = apply(v) - beta * v_previous",
+        "w = apply(v) - 0.5 * beta * v_previous",
+        ("tests/test_longchain.py", "-k", "lanczos or closed_forms"),
+        "Lanczos recurrence with a wrong β term (the tridiagonal is no longer M's projection)",
+    ),
+    Mutant(
+        "watch-lanczos-tol-1e-1",
+        "gimwatch/metrics/watch.py",
+        "TOL: ClassVar[float] = 1e-3",
+        "TOL: ClassVar[float] = 1e-1",
+        ("tests/test_watch.py",),
+        "the watch's Lanczos κ at 10 % accuracy",
+    ),
     # --- stress bounds ---
     Mutant(
         "stress-constant-1e5",
@@ -298,6 +354,30 @@ MUTANTS = (
         "e is not None and np.isfinite(e) and e <= 1e5 * bound",
         STRESS_QUICK,
         "the suite's pass check ignores its bound",
+    ),
+    Mutant(
+        "stress-gim-check-loose",
+        "gimwatch/stress/suite.py",
+        "GIM_RTOL = 1e-10",
+        "GIM_RTOL = 1e-2",
+        STRESS_QUICK,
+        "the suite accepts a DeNOC M off by 1 %",
+    ),
+    Mutant(
+        "stress-drift-limit-loose",
+        "gimwatch/stress/suite.py",
+        "ENERGY_DRIFT_LIMIT = 1e-8",
+        "ENERGY_DRIFT_LIMIT = 1e-2",
+        STRESS_QUICK,
+        "the suite accepts a 1 % energy drift",
+    ),
+    Mutant(
+        "stress-simulation-loose",
+        "gimwatch/stress/suite.py",
+        'table["integrator"] = {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10}',
+        'table["integrator"] = {"method": "DOP853", "rtol": 1e-6, "atol": 1e-6}',
+        STRESS_QUICK,
+        "the suite's 5 s simulations at 1e-6 instead of 1e-10",
     ),
     # --- watch sampling ---
     Mutant(

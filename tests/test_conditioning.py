@@ -113,3 +113,13 @@ def test_invalid_matrices_are_rejected(matrix, message):
     assert str(info.value).startswith(message)
     with pytest.raises(ConditioningError):
         check_gim(matrix) if "definite" not in message else pivot_ratio_forward(matrix)
+
+
+def test_asymmetry_beyond_round_off_is_rejected(paper_gim):
+    # 1e-8 relative asymmetry is far beyond round-off (CRBA's is ~1e-16): not a GIM
+    M = paper_gim.copy()
+    M[0, 1] += 1e-8 * np.abs(M).max()
+    with pytest.raises(ConditioningError, match="the GIM must be symmetric"):
+        condition_number(M)
+    M[0, 1] = M[1, 0] + 1e-13 * np.abs(M).max()  # round-off: accepted
+    assert condition_number(M) > 1

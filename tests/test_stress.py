@@ -200,3 +200,34 @@ def test_stress_command_refuses_an_unknown_case(capsys):
     assert main(["stress", "nope"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("gimwatch: error: the stress case must be one of")
+
+
+def test_suite_fails_a_case_whose_denoc_gim_is_off(monkeypatch):
+    # DeNOC's M off by 1e-8 relative (CRBA agrees with it to ~1e-16 on ur5): a failed case
+    from gimwatch.stress import suite
+
+    original = suite.denoc_model
+
+    class Perturbed:
+        def __init__(self, model):
+            self._model = model
+
+        def __getattr__(self, name):
+            return getattr(self._model, name)
+
+        def gim(self, q):
+            return self._model.gim(q) * (1 + 1e-8)
+
+    monkeypatch.setattr(suite, "denoc_model", lambda robot: Perturbed(original(robot)))
+    result = run_case(CASES["ur5-wrist-aligned"])
+    assert result.gim_error == pytest.approx(1e-8, rel=1e-3)
+    assert not result.passed
+
+
+def test_suite_fails_a_simulation_that_drifts(monkeypatch):
+    # a 5 s run with relative drift 1e-6 (1,000× the worst measured) fails the case
+    from gimwatch.stress import suite
+
+    monkeypatch.setattr(suite, "simulate_case", lambda case, robot, q: ("completed", 1e-6))
+    result = run_case(CASES["ur5-wrist-aligned"], simulate=True)
+    assert result.sim_energy_drift == 1e-6 and not result.passed
