@@ -325,31 +325,6 @@ def test_on_alarm_stop_keeps_results_and_ctrl_c_keeps_them_too():
     assert run.watch["watch_kappa"].size == run.t.size
 
 
-def test_floating_chain_falls_freely_with_a_fixed_step_integrator():
-    # no joint torques: the centre of mass of a free-floating body falls as g t^2 / 2
-    sim = Simulation(
-        scene(
-            "chain:2",
-            duration=1.0,
-            sample=0.1,
-            base="floating",
-            v=[0, 0, 0, 0, 0, 1.0, 0.5, 0.0],
-            effects=GRAVITY,
-            integrator={"method": "RK4", "dt": 0.01},
-        )
-    )
-    run = sim.run()
-    model, data = sim.robot.model, sim.robot.new_data()
-    com = np.array([pin.centerOfMass(model, data, q) for q in run.q])
-    expected = com[0] + np.outer(run.t**2 / 2, [0.0, -9.81, 0.0])
-    np.testing.assert_allclose(com, expected, atol=1e-7)
-    quaternion = run.q[:, 3:7]
-    np.testing.assert_allclose(np.linalg.norm(quaternion, axis=1), 1.0, atol=1e-12)
-    assert run.energy_drift() < 1e-6
-
-
-def test_floating_base_with_an_adaptive_method_is_refused():
-    from gimwatch.errors import SceneError
-
-    with pytest.raises(SceneError, match=r"test\.toml: integrator\.method: DOP853 integrates q"):
-        Simulation(scene("chain:2", base="floating"))
+# Floating bases (free fall of the centre of mass, unit quaternions) and continuous joints
+# in every integrator: tests/test_manifold.py. (A floating chain:N is singular: its massless
+# base link turns about the same axis as joint_1, so it cannot be used for these.)

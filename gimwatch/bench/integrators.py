@@ -65,10 +65,6 @@ COLUMNS = (
 )
 
 
-class _TooSlow(Exception):
-    pass
-
-
 def chain_scene_table(n: int, *, duration_s: float | None = None) -> dict:
     """The TOML table of ``scenes/chain_<n>.toml`` with the δ watch only and ``aba``.
 
@@ -99,15 +95,13 @@ def _simulate(table: dict, integrator: dict, cap_s: float):
         simulation = Simulation(scene)
         start = time.perf_counter()
 
-        def stop_when_too_slow(_fraction: float, start=start) -> None:
-            if time.perf_counter() - start > cap_s:
-                raise _TooSlow
+        def stop_when_too_slow(_fraction: float, start=start) -> str | None:
+            return "too slow" if time.perf_counter() - start > cap_s else None
 
-        try:
-            with warnings.catch_warnings():  # SciPy: "rtol too small, raised to 2.2e-14"
-                warnings.simplefilter("ignore", UserWarning)
-                trajectory = simulation.run(progress=stop_when_too_slow)
-        except _TooSlow:
+        with warnings.catch_warnings():  # SciPy: "rtol too small, raised to 2.2e-14"
+            warnings.simplefilter("ignore", UserWarning)
+            trajectory = simulation.run(progress=stop_when_too_slow)
+        if trajectory.status == "stopped":
             return None
         walls.append(trajectory.wall_time_s)
     return trajectory, float(np.median(walls))

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import InputError
 from gimwatch.metrics.dense_analysis import analyze_configuration
+from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     load_robot,
@@ -51,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         nargs="+",
         metavar="Q",
-        help="configuration (nq numbers); default: neutral",
+        help="configuration: nq numbers, a continuous joint by its angle (rad); default: neutral",
     )
     parser.add_argument(
         "--random",
@@ -76,10 +78,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _configurations(args: argparse.Namespace, nq: int, neutral, draw) -> list:
+def _configurations(args: argparse.Namespace, nq: int, neutral, draw, robot=None) -> list:
     if args.random is not None:
         return list(draw(args.random))
     if args.q is not None:
+        if robot is not None and robot.nq != robot.nv:  # continuous joints by angle, unit checks
+            if not all(math.isfinite(x) for x in args.q):
+                raise InputError("q", "finite", args.q)
+            return [user_configuration(robot, args.q, key="--q")]
         if len(args.q) != nq:
             raise InputError("--q", f"{nq} numbers for {args.robot}", len(args.q))
         return [args.q]
@@ -119,6 +125,7 @@ def _run_linear(args: argparse.Namespace, chain, announce: bool) -> list:
             robot.nq,
             neutral_configuration(robot),
             lambda k: random_configurations(robot, k, seed=args.seed),
+            robot,
         )
     if announce:
         print(
@@ -151,6 +158,7 @@ def run(args: argparse.Namespace) -> int:
             robot.nq,
             neutral_configuration(robot),
             lambda k: random_configurations(robot, k, seed=args.seed),
+            robot,
         )
         data = robot.new_data()
         results = [analyze_configuration(robot, q, data=data) for q in configurations]

@@ -8,8 +8,9 @@ import sys
 from pathlib import Path
 
 from gimwatch.cli._progress import ProgressBar
+from gimwatch.simulation.backends import BACKENDS
 from gimwatch.simulation.results_folder import summarize, write_simulation
-from gimwatch.simulation.scene import BACKENDS, load_scene
+from gimwatch.simulation.scene import load_scene
 from gimwatch.simulation.simulate import Simulation
 
 NAME = "simulate"
@@ -24,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--backend",
-        choices=BACKENDS,
+        choices=tuple(BACKENDS),
         help="dynamics backend instead of the scene's [dynamics] backend (denoc: the O(n) path "
         "for long fixed-base chains; chosen anyway above nv = 400)",
     )

@@ -8,10 +8,14 @@ gravity term is ever formed. Effects that are not declared are not instantiated 
 * ``gravity`` — ``g(q)`` through the backend (Pinocchio's ``model.gravity``).
 * ``damping`` — viscous joint damping ``τ = -c ⊙ v``.
 * ``spring`` — joint springs ``τ = -k ⊙ (q - q_rest)``, potential ``½ Σ k (q - q_rest)²``.
-* ``torque`` — applied joint torques: ``constant`` (``τ = τ₀``), ``sinusoid``
-  (``τ = τ₀ + A sin(2π f t + φ)``) or ``pd`` (``τ = k_p (q* - q) - k_d v``).
+* ``torque`` — applied joint torques by a named law (:mod:`gimwatch.simulation.torque_laws`).
 * ``wrench`` — a constant wrench (force, torque) on a named link, mapped to joint space
   as ``τ = Jᵀ w`` with Pinocchio's frame Jacobian (``LOCAL`` or ``LOCAL_WORLD_ALIGNED``).
+
+How to add an effect: subclass :class:`Effect`, set ``name``, ``parameters`` and the flags,
+resolve the parameters in ``__init__`` and implement :meth:`Effect.tau` (and
+:meth:`Effect.potential_energy` when ``conservative``); decorate it with :func:`register`.
+The scene reader validates its table from ``parameters``; the scene reference lists it.
 """
 
 from __future__ import annotations
@@ -22,70 +26,26 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import SceneError
+from gimwatch.model.configuration import coordinate_kinds
 from gimwatch.model.robots import Robot
+from gimwatch.simulation.joint_values import joint_vector
+from gimwatch.simulation.parameters import Parameter
+from gimwatch.simulation.torque_laws import TORQUE_LAWS, CallableLaw
 
-__all__ = ["EFFECTS", "Effect", "build_effects", "joint_vector"]
-
-
-def joint_vector(
-    robot: Robot,
-    values: Any,
-    *,
-    source: str,
-    key: str,
-    space: str = "v",
-    default: np.ndarray | float = 0.0,
-) -> np.ndarray:
-    """Resolve a scene's joint-indexed value (number, list, or table by joint name).
-
-    Args:
-        robot: The robot whose joint names and sizes apply.
-        values: A number (broadcast), a tuple (one per coordinate) or a dict by joint name.
-        source: The scene file, for error messages.
-        key: The scene key, for error messages.
-        space: ``"q"`` (length nq) or ``"v"`` (length nv).
-        default: Value of coordinates a table does not name.
-
-    Raises:
-        SceneError: Wrong length, unknown joint name, or broadcast onto a non-Euclidean q.
-    """
-    model = robot.model
-    size = model.nq if space == "q" else model.nv
-    out = np.array(np.broadcast_to(np.asarray(default, dtype=float), (size,)))
-    if isinstance(values, dict):
-        names = list(robot.joint_names)
-        for name, value in values.items():
-            if name not in names:
-                shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
-                raise SceneError(
-                    source, f"{key}.{name}", f"unknown joint; {robot.name} has {shown}"
-                )
-            joint = model.joints[model.getJointId(name)]
-            start, width = (joint.idx_q, joint.nq) if space == "q" else (joint.idx_v, joint.nv)
-            if width != 1:
-                raise SceneError(
-                    source, f"{key}.{name}", f"joint has {width} coordinates; give a list instead"
-                )
-            out[start] = value
-        return out
-    if isinstance(values, (tuple, list)):
-        if len(values) != size:
-            raise SceneError(
-                source,
-                key,
-                f"must have {size} values ({space}-coordinates of {robot.name}), got {len(values)}",
-            )
-        return np.array(values, dtype=float)
-    if space == "q" and model.nq != model.nv:
-        raise SceneError(
-            source, key, f"{robot.name} has quaternion coordinates; give a list of {size} values"
-        )
-    out[:] = float(values)
-    return out
+__all__ = ["EFFECTS", "CallableTorque", "Effect", "build_effects", "joint_vector", "register"]
 
 
 class Effect:
     """Base class: one declared effect, built once from the scene, evaluated per RHS call.
+
+    Contract:
+        * ``name`` — the scene name (``[effects.<name>]``), unique in :data:`EFFECTS`.
+        * ``parameters`` — its keys, validated by the scene reader before the robot is known.
+        * ``__init__(robot, params, *, source)`` resolves them against the robot (joint names,
+          lengths) and raises :class:`~gimwatch.errors.SceneError` naming ``source`` and key.
+        * :meth:`tau` returns the generalized force (length nv) at each right-hand-side
+          evaluation — a few NumPy or Pinocchio calls, no Python loop over joints.
+        * ``conservative`` effects implement :meth:`potential_energy` (the energy check).
 
     Attributes:
         name: The scene name of the effect (registry key).
@@ -95,6 +55,7 @@ class Effect:
     """
 
     name: ClassVar[str]
+    parameters: ClassVar[tuple[Parameter, ...]] = ()
     uses_velocity: ClassVar[bool] = False
     conservative: ClassVar[bool] = False
     adds_torque: ClassVar[bool] = True
@@ -111,23 +72,41 @@ class Effect:
         return 0.0
 
 
+#: The registry: scene effect name -> class.
+EFFECTS: dict[str, type[Effect]] = {}
+
+
+def register(cls: type[Effect]) -> type[Effect]:
+    """Class decorator: add an effect to :data:`EFFECTS` under its ``name``."""
+    if cls.name in EFFECTS:
+        raise ValueError(f"effect {cls.name!r} is already registered")
+    EFFECTS[cls.name] = cls
+    return cls
+
+
+@register
 class Gravity(Effect):
     """Uniform gravity ``vector`` (m/s²); the backend forms g(q) in its own recursion."""
 
     name = "gravity"
     conservative = True
     adds_torque = False
+    parameters = (Parameter("vector", "vector3", required=True, doc="g (m/s²), world axes"),)
 
     def __init__(self, robot: Robot, params: dict[str, Any], *, source: str) -> None:
         super().__init__(robot, params, source=source)
         self.vector = np.array(params["vector"], dtype=float)
 
 
+@register
 class Damping(Effect):
     """Viscous joint damping ``τ = -c ⊙ v`` (c in N·m·s/rad or N·s/m)."""
 
     name = "damping"
     uses_velocity = True
+    parameters = (
+        Parameter("coefficient", "joint", required=True, nonnegative=True, doc="c (N·m·s/rad)"),
+    )
 
     def __init__(self, robot: Robot, params: dict[str, Any], *, source: str) -> None:
         super().__init__(robot, params, source=source)
@@ -139,20 +118,25 @@ class Damping(Effect):
         return -self.c * v
 
 
-def _euclidean(robot: Robot, source: str, key: str) -> None:
-    if robot.nq != robot.nv:
-        raise SceneError(source, key, f"needs nq = nv; {robot.name} has quaternion coordinates")
-
-
+@register
 class Spring(Effect):
-    """Joint springs ``τ = -k ⊙ (q - q_rest)``, energy ``½ Σ k (q - q_rest)²``."""
+    """Joint springs ``τ = -k ⊙ (q - q_rest)``, energy ``½ Σ k (q - q_rest)²`` (nq = nv)."""
 
     name = "spring"
     conservative = True
+    parameters = (
+        Parameter("stiffness", "joint", required=True, nonnegative=True, doc="k (N·m/rad)"),
+        Parameter("rest", "configuration", default=0.0, doc="q_rest (rad or m), default 0"),
+    )
 
     def __init__(self, robot: Robot, params: dict[str, Any], *, source: str) -> None:
         super().__init__(robot, params, source=source)
-        _euclidean(robot, source, "effects.spring")
+        if robot.nq != robot.nv:
+            raise SceneError(
+                source,
+                "effects.spring",
+                f"needs nq = nv; {robot.name} has {coordinate_kinds(robot)}",
+            )
         key = "effects.spring."
         self.k = joint_vector(robot, params["stiffness"], source=source, key=key + "stiffness")
         self.rest = joint_vector(robot, params["rest"], source=source, key=key + "rest", space="q")
@@ -164,40 +148,25 @@ class Spring(Effect):
         return float(0.5 * np.sum(self.k * (q - self.rest) ** 2))
 
 
+@register
 class Torque(Effect):
-    """Applied joint torques by law: constant, sinusoid or PD tracking a target."""
+    """Applied joint torques by a law of :data:`~gimwatch.simulation.torque_laws.TORQUE_LAWS`."""
 
     name = "torque"
+    parameters = (
+        Parameter("law", "string", required=True, choices=tuple(TORQUE_LAWS), doc="the torque law"),
+    )
 
     def __init__(self, robot: Robot, params: dict[str, Any], *, source: str) -> None:
         super().__init__(robot, params, source=source)
-        self.law = params["law"]
-        key = "effects.torque."
-
-        def vec(name: str, space: str = "v", default: float = 0.0) -> np.ndarray:
-            if name not in params:
-                return np.full(robot.nv if space == "v" else robot.nq, default)
-            return joint_vector(robot, params[name], source=source, key=key + name, space=space)
-
-        self.value = vec("value")
-        if self.law == "sinusoid":
-            self.amplitude = vec("amplitude")
-            self.omega = 2.0 * np.pi * params["frequency_hz"]
-            self.phase = params.get("phase_rad", 0.0)
-        elif self.law == "pd":
-            _euclidean(robot, source, "effects.torque")
-            self.kp, self.kd, self.target = vec("kp"), vec("kd"), vec("target", "q")
-        # Only the PD law reads v: declared velocity dependence, per instance.
-        self.uses_velocity = self.law == "pd"
+        self.law = TORQUE_LAWS[params["law"]](robot, params, source=source)
+        self.uses_velocity = self.law.uses_velocity  # declared per instance
 
     def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        if self.law == "constant":
-            return self.value
-        if self.law == "sinusoid":
-            return self.value + self.amplitude * np.sin(self.omega * t + self.phase)
-        return self.kp * (self.target - q) - self.kd * v
+        return self.law(t, q, v)
 
 
+@register
 class Wrench(Effect):
     """A constant wrench on a named link: ``τ = J(q)ᵀ [f; n]`` (N, N·m).
 
@@ -206,6 +175,14 @@ class Wrench(Effect):
     """
 
     name = "wrench"
+    parameters = (
+        Parameter("link", "string", required=True, doc="the link (URDF link name)"),
+        Parameter("force", "vector3", default=(0.0, 0.0, 0.0), doc="f (N)"),
+        Parameter("torque", "vector3", default=(0.0, 0.0, 0.0), doc="n (N·m)"),
+        Parameter(
+            "frame", "string", default="world", choices=("world", "local"), doc="axes of f, n"
+        ),
+    )
 
     def __init__(self, robot: Robot, params: dict[str, Any], *, source: str) -> None:
         super().__init__(robot, params, source=source)
@@ -229,10 +206,22 @@ class Wrench(Effect):
         return J.T @ self.wrench
 
 
-#: The registry: scene effect name -> class.
-EFFECTS: dict[str, type[Effect]] = {
-    cls.name: cls for cls in (Gravity, Damping, Spring, Torque, Wrench)
-}
+class CallableTorque(Effect):
+    """A Python torque law ``tau(t, q, v)`` handed to ``run_scene`` (not a scene key).
+
+    Its result is checked at every call (:class:`~gimwatch.simulation.torque_laws.CallableLaw`).
+    """
+
+    name = "torque_law"
+    uses_velocity = True
+
+    def __init__(self, robot: Robot, law) -> None:
+        self.robot = robot
+        self.law = CallableLaw(law, robot)
+
+    def tau(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """The law's τ(t, q, v), checked."""
+        return self.law(t, q, v)
 
 
 def build_effects(robot: Robot, specs, *, source: str) -> list[Effect]:

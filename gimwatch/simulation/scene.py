@@ -22,6 +22,13 @@ from pathlib import Path
 from typing import Any
 
 from gimwatch.errors import SceneError
+from gimwatch.metrics.watch import METRICS
+from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
+from gimwatch.simulation.backends import BACKENDS as BACKEND_CLASSES
+from gimwatch.simulation.effects import EFFECTS
+from gimwatch.simulation.integrators import INTEGRATORS
+from gimwatch.simulation.parameters import Parameter
+from gimwatch.simulation.torque_laws import TORQUE_LAWS
 from gimwatch.suggest import did_you_mean
 
 __all__ = [
@@ -31,6 +38,7 @@ __all__ = [
     "METRIC_NAMES",
     "ON_ALARM_ACTIONS",
     "SCIPY_METHODS",
+    "TORQUE_LAW_NAMES",
     "EffectSpec",
     "IntegratorSpec",
     "RobotSpec",
@@ -40,37 +48,28 @@ __all__ = [
     "parse_scene",
 ]
 
-SCIPY_METHODS = ("RK45", "DOP853", "Radau", "LSODA")
-FIXED_STEP_METHODS = ("RK4", "semi-implicit-euler")
-BACKENDS = ("aba", "crba-cholesky", "denoc")
-METRIC_NAMES = (
-    "kappa",
-    "kappa_lanczos",
-    "kappa_tracked",
-    "diagonal_ratio",
-    "scaled_diagonal_ratio",
-    "pivot_ratio_forward",
-    "pivot_ratio_backward",
-    "rcond",
-    "eigenvalues",
-    "diagonal",
-)
-#: What to do when the alarm metric crosses its threshold (see gimwatch.simulation.simulate).
-ON_ALARM_ACTIONS = ("warn", "stop", "tighten", "switch-backend")
-TORQUE_LAWS = ("constant", "sinusoid", "pd")
+# The names below are read from the live registries (one source per family): adding an
+# effect, torque law, integrator, backend or on-alarm action there adds it here.
+SCIPY_METHODS = tuple(name for name, cls in INTEGRATORS.items() if not cls.fixed_step)
+FIXED_STEP_METHODS = tuple(name for name, cls in INTEGRATORS.items() if cls.fixed_step)
+BACKENDS = tuple(BACKEND_CLASSES)
+METRIC_NAMES = tuple(METRICS)
+#: What to do when the alarm metric crosses its threshold (gimwatch.simulation.alarm_actions).
+ON_ALARM_ACTIONS = tuple(ALARM_ACTIONS)
+TORQUE_LAW_NAMES = tuple(TORQUE_LAWS)
 
 #: Each effect's keys: name -> (required keys, optional keys).
 EFFECT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "gravity": (("vector",), ()),
-    "damping": (("coefficient",), ()),
-    "spring": (("stiffness",), ("rest",)),
-    "torque": (("law",), ("value", "amplitude", "frequency_hz", "phase_rad", "kp", "kd", "target")),
-    "wrench": (("link",), ("force", "torque", "frame")),
-}
-_TORQUE_LAW_KEYS = {
-    "constant": ({"value"}, set()),
-    "sinusoid": ({"amplitude", "frequency_hz"}, {"phase_rad", "value"}),
-    "pd": ({"kp", "kd", "target"}, set()),
+    name: (
+        tuple(p.name for p in cls.parameters if p.required),
+        tuple(p.name for p in cls.parameters if not p.required)
+        + (
+            tuple(sorted({p.name for law in TORQUE_LAWS.values() for p in law.parameters}))
+            if name == "torque"
+            else ()
+        ),
+    )
+    for name, cls in EFFECTS.items()
 }
 _TOP_KEYS = {
     "robot",
@@ -127,7 +126,7 @@ class IntegratorSpec:
     @property
     def fixed_step(self) -> bool:
         """Whether the method takes fixed steps of ``dt``."""
-        return self.method in FIXED_STEP_METHODS
+        return INTEGRATORS[self.method].fixed_step
 
 
 @dataclass(frozen=True)
@@ -283,51 +282,50 @@ def _robot(reader: _Reader, base_dir: Path | None) -> RobotSpec:
     return RobotSpec(spec=value, floating=floating)
 
 
+def _parameter(table: _Reader, parameter: Parameter) -> Any:
+    """Read one declared parameter (absent: its default, or None)."""
+    name, kind = parameter.name, parameter.kind
+    if kind == "number":
+        return table.number(name, parameter.default, positive=parameter.positive)
+    if kind in ("joint", "configuration"):
+        return table.joint_values(name, parameter.default, nonnegative=parameter.nonnegative)
+    if kind == "vector3":
+        return table.vector3(name, parameter.default)
+    return table.string(name, parameter.default, choices=parameter.choices)
+
+
 def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
     effects = []
     for name in reader.table:
-        if name not in EFFECT_KEYS:
-            raise reader.fail(name, f"unknown effect; expected one of {', '.join(EFFECT_KEYS)}")
+        if name not in EFFECTS:
+            raise reader.fail(name, f"unknown effect; expected one of {', '.join(EFFECTS)}")
         table = reader.sub(name)
         required, optional = EFFECT_KEYS[name]
         table.check_keys(set(required) | set(optional), required)
         params: dict[str, Any] = {}
-        if name == "gravity":
-            params["vector"] = table.vector3("vector")
-        elif name == "damping":
-            params["coefficient"] = table.joint_values("coefficient", nonnegative=True)
-        elif name == "spring":
-            params["stiffness"] = table.joint_values("stiffness", nonnegative=True)
-            params["rest"] = table.joint_values("rest", 0.0)
-        elif name == "torque":
-            law = table.string("law", choices=TORQUE_LAWS)
-            must, may = _TORQUE_LAW_KEYS[law]
+        for parameter in EFFECTS[name].parameters:
+            value = _parameter(table, parameter)
+            if value is not None:
+                params[parameter.name] = value
+        if name == "torque":
+            law = params["law"]
+            declared = {p.name: p for p in TORQUE_LAWS[law].parameters}
+            must = {key for key, p in declared.items() if p.required}
             present = set(table.table) - {"law"}
-            for key in sorted(present - must - may):
+            for key in sorted(present - set(declared)):
                 raise table.fail(key, f"is not a parameter of the {law!r} torque law")
             for key in sorted(must - present):
                 raise table.fail(key, f"is required by the {law!r} torque law")
-            params["law"] = law
             for key in present:
-                if key == "frequency_hz":
-                    params[key] = table.number(key, positive=True)
-                elif key == "phase_rad":
-                    params[key] = table.number(key)
-                else:
-                    params[key] = table.joint_values(key, nonnegative=key in ("kp", "kd"))
-        elif name == "wrench":
-            params["link"] = table.string("link")
-            params["force"] = table.vector3("force", (0.0, 0.0, 0.0))
-            params["torque"] = table.vector3("torque", (0.0, 0.0, 0.0))
-            params["frame"] = table.string("frame", "world", choices=("world", "local"))
+                params[key] = _parameter(table, declared[key])
         effects.append(EffectSpec(name=name, params=params))
     return tuple(effects)
 
 
 def _integrator(reader: _Reader) -> IntegratorSpec:
     reader.check_keys({"method", "rtol", "atol", "dt", "max_step"})
-    method = reader.string("method", "DOP853", choices=SCIPY_METHODS + FIXED_STEP_METHODS)
-    if method in FIXED_STEP_METHODS:
+    method = reader.string("method", "DOP853", choices=tuple(INTEGRATORS))
+    if INTEGRATORS[method].fixed_step:
         if "dt" not in reader.table:
             raise reader.fail("dt", f"is required by the fixed-step method {method}")
         for key in ("rtol", "atol", "max_step"):

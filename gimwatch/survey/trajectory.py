@@ -188,10 +188,6 @@ class SurveyRun:
         return float(self.kappa.max() / self.kappa.min()) if self.kappa.size else math.nan
 
 
-class _StepBudget(KeyboardInterrupt):
-    """Raised between steps to stop a run over budget; the simulation keeps what it computed."""
-
-
 def correlations(delta: np.ndarray, kappa: np.ndarray) -> tuple[float, float]:
     """Pearson r(log δ, log κ) and Spearman ρ(δ, κ); NaN with < 3 samples or a constant one."""
     if delta.size < 3 or np.ptp(delta) == 0 or np.ptp(kappa) == 0:
@@ -218,17 +214,17 @@ def run_trajectory(
     simulation = Simulation(trajectory_scene(robot, q0, settings))
     steps = 0
 
-    def budget(_: float) -> None:
+    def budget(_: float) -> str | None:
+        """Stop the run (by returning a message) once it has taken max_steps steps."""
         nonlocal steps
         steps += 1
-        if steps >= settings.max_steps:
-            raise _StepBudget
+        return "step budget" if steps >= settings.max_steps else None
 
     trajectory = simulation.run(progress=budget)
     status, message = trajectory.status, trajectory.message
     if status == "interrupted":
-        if steps < settings.max_steps:
-            raise KeyboardInterrupt  # the user's Ctrl-C: stop the survey, not just this run
+        raise KeyboardInterrupt  # the user's Ctrl-C: stop the survey, not just this run
+    if status == "stopped":
         status = "step-budget"
         message = f"stopped after {steps} steps at t = {trajectory.t[-1]:.3g} s (stiff)"
     watch = trajectory.watch

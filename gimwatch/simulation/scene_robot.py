@@ -1,0 +1,62 @@
+"""The scene's robot and its initial state: ``robot``/``base`` and ``q``/``v`` resolved.
+
+Loading failures become a :class:`~gimwatch.errors.SceneError` on key ``robot``; q is read
+in user coordinates (continuous joints by angle, ``q = 0.0``: every angle zero and the
+neutral base; see :mod:`gimwatch.model.configuration`), v in velocity coordinates.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gimwatch.errors import GimwatchError, RobotError, SceneError
+from gimwatch.model.chains import chain_spec
+from gimwatch.model.robots import (
+    DATA_NV_LIMIT,
+    Robot,
+    chain_robot,
+    load_robot,
+    neutral_configuration,
+)
+from gimwatch.simulation.joint_values import joint_vector
+
+__all__ = ["initial_state", "load_scene_robot"]
+
+
+def _chain_robot(params: dict, floating: bool) -> Robot:
+    # checked before any URDF is generated: a floating base needs Pinocchio's Data (memory
+    # ∝ nv³); a fixed one runs on the O(n) denoc backend, up to the URDF parser's depth
+    # (chain_robot checks that)
+    nv = params["n"] + 6
+    if floating and nv > DATA_NV_LIMIT:
+        raise RobotError(
+            f"chain:{params['n']}",
+            f"nv = {nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
+            f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
+        )
+    options = {k: v for k, v in params.items() if k != "n"}
+    return chain_robot(chain_spec(params["n"], **options), floating=floating)
+
+
+def load_scene_robot(scene) -> Robot:
+    """Load the scene's robot; failures become a :class:`SceneError` on key ``robot``."""
+    try:
+        if scene.robot.chain is not None:
+            return _chain_robot(scene.robot.chain, scene.robot.floating)
+        floating = scene.robot.floating
+        return load_robot(
+            scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None
+        )
+    except SceneError:
+        raise
+    except GimwatchError as exc:
+        raise scene.error("robot", str(exc)) from exc
+
+
+def initial_state(scene, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """(q0, v0): the scene's ``q`` (neutral when absent) and ``v`` resolved on the robot."""
+    q0 = neutral_configuration(robot)
+    if scene.q is not None:
+        q0 = joint_vector(robot, scene.q, source=scene.source, key="q", space="q", default=q0)
+    v0 = joint_vector(robot, scene.v, source=scene.source, key="v")
+    return q0, v0
