@@ -58,18 +58,19 @@ METRIC_NAMES = tuple(METRICS)
 ON_ALARM_ACTIONS = tuple(ALARM_ACTIONS)
 TORQUE_LAW_NAMES = tuple(TORQUE_LAWS)
 
-#: Each effect's keys: name -> (required keys, optional keys).
+
+def _effect_keys(name: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """An effect's (required, optional) keys, from the live registries."""
+    parameters = EFFECTS[name].parameters
+    optional = tuple(p.name for p in parameters if not p.required)
+    if name == "torque":  # every law's keys; the law's own are checked once it is known
+        optional += tuple(sorted({p.name for law in TORQUE_LAWS.values() for p in law.parameters}))
+    return tuple(p.name for p in parameters if p.required), optional
+
+
+#: Each effect's keys: name -> (required keys, optional keys), as registered at import.
 EFFECT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    name: (
-        tuple(p.name for p in cls.parameters if p.required),
-        tuple(p.name for p in cls.parameters if not p.required)
-        + (
-            tuple(sorted({p.name for law in TORQUE_LAWS.values() for p in law.parameters}))
-            if name == "torque"
-            else ()
-        ),
-    )
-    for name, cls in EFFECTS.items()
+    name: _effect_keys(name) for name in EFFECTS
 }
 _TOP_KEYS = {
     "robot",
@@ -291,7 +292,7 @@ def _parameter(table: _Reader, parameter: Parameter) -> Any:
         return table.joint_values(name, parameter.default, nonnegative=parameter.nonnegative)
     if kind == "vector3":
         return table.vector3(name, parameter.default)
-    return table.string(name, parameter.default, choices=parameter.choices)
+    return table.string(name, parameter.default, choices=tuple(parameter.choices))
 
 
 def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
@@ -300,7 +301,7 @@ def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
         if name not in EFFECTS:
             raise reader.fail(name, f"unknown effect; expected one of {', '.join(EFFECTS)}")
         table = reader.sub(name)
-        required, optional = EFFECT_KEYS[name]
+        required, optional = _effect_keys(name)
         table.check_keys(set(required) | set(optional), required)
         params: dict[str, Any] = {}
         for parameter in EFFECTS[name].parameters:
