@@ -4,8 +4,9 @@ A scene is a TOML file read with :mod:`tomllib` and validated once, into frozen
 dataclasses. Unknown keys, wrong types, wrong lengths, negative durations, unknown effect,
 metric, joint or link names are :class:`~gimwatch.errors.SceneError` naming the file and
 the key (``scene.toml: effects.spring.stiffness: ...``). The schema is documented in the
-docs (``docs/guide/simulate.md``); :data:`EFFECT_KEYS` and :data:`METRIC_NAMES` are the
-registries' names.
+docs (``docs/scenes.md``, generated from the registries). Names are looked up in the live
+registries at parse time; :data:`EFFECT_KEYS`, :data:`METRIC_NAMES` and the other tuples
+are the names registered at import.
 
 Joint-indexed values (``q``, ``v``, damping, stiffness, torques, targets) are given as a
 number (broadcast to every coordinate), a list (one per coordinate) or a table keyed by
@@ -349,11 +350,11 @@ def _watch(reader: _Reader) -> WatchSpec:
     if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
         raise reader.fail("metrics", f"must be a list of metric names, got {metrics!r}")
     for metric in metrics:
-        if metric not in METRIC_NAMES:
+        if metric not in METRICS:
             raise reader.fail(
                 "metrics",
-                f"unknown metric {metric!r}; expected one of {', '.join(METRIC_NAMES)}"
-                + did_you_mean(metric, METRIC_NAMES),
+                f"unknown metric {metric!r}; expected one of {', '.join(METRICS)}"
+                + did_you_mean(metric, tuple(METRICS)),
             )
     if len(set(metrics)) != len(metrics):
         raise reader.fail("metrics", f"lists a metric twice: {metrics!r}")
@@ -367,7 +368,7 @@ def _watch(reader: _Reader) -> WatchSpec:
             )
         if threshold is None:
             raise reader.fail("alarm_threshold", "is required when alarm_metric is given")
-    on_alarm = reader.string("on_alarm", "warn", choices=ON_ALARM_ACTIONS)
+    on_alarm = reader.string("on_alarm", "warn", choices=tuple(ALARM_ACTIONS))
     return WatchSpec(tuple(metrics), alarm_metric, threshold, on_alarm)
 
 
@@ -423,7 +424,7 @@ def parse_scene(
         v=reader.joint_values("v", 0.0, bound=MAX_INITIAL_STATE),
         effects=_effects(reader.sub("effects")),
         integrator=integrator,
-        backend=dynamics.string("backend", "aba", choices=BACKENDS),
+        backend=dynamics.string("backend", "aba", choices=tuple(BACKEND_CLASSES)),
         watch=_watch(reader.sub("watch")),
         raw=table,
     )
