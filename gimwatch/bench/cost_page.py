@@ -62,7 +62,7 @@ def claim_table(folder: str | Path) -> str:
         rows = {int(r["n"]): r for r in claim if r["estimator"] == key}
         cost = float(rows[20]["sample_us"])
         if key in ("delta", "alpha_delta"):
-            at_200 = 1.0 / float(lean[200]["kappa_eig_vs_delta"])
+            at_200 = float(lean[200]["delta_watch_us"]) / float(lean[200]["kappa_eig_us"])
             at_200_text = f"{at_200:.2g}" + (" (as δ after t0)" if key == "alpha_delta" else "")
         elif key == "tracker":
             at_200_text = f"{float(samples[(200, 'tracker')]['vs_dense']):.2g}"

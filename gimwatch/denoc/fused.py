@@ -15,8 +15,9 @@ qy, qz, qw), v = (local linear, local angular), and its six columns are
 
 Packed inputs (built once by :class:`~gimwatch.denoc.lean.LeanModel`):
 
-* ``index`` (N, 4) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic),
-  index of the body's first q entry, index of its v entry (for the root: of the first of six);
+* ``index`` (N, 5) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic),
+  index of the body's first q entry, index of its v entry (for the root: of the first of six),
+  1 when the joint's placement rotation is the identity (its product is skipped);
 * ``geometry`` (N, 28): axis (0:3), placement rotation row-major (3:12), placement translation
   (12:15), mass (15), centre of mass (16:19), inertia about it row-major (19:28).
 
@@ -24,7 +25,8 @@ Buffers: ``rot`` (N, 3, 3); ``vec`` (N, 5, 3) = origin, reach r_i = O_i − O_pa
 e_i, centre-of-mass offset d_i, angular velocity ω_i; ``six`` (N, 5, 6) = U_i, velocity bias
 c_i, bias wrench b_i, twist rate, wrench; ``block`` (N, 2, 6, 6) = M_i, composite /
 articulated M̃_i; ``scal`` (N, 2) = pivot D_i, u_i; ``root`` (7, 6) = the free-flyer's 6×6
-UDUᵀ factor (rows 0–5 U, row 6 D). Conventions and equations as in :mod:`.compiled`
+UDUᵀ factor (rows 0–5 U, row 6 D); ``comp`` (N, 10) = the composite mass, first moment and
+rotational inertia the diagonal needs. Conventions and equations as in :mod:`.compiled`
 (Shah & Saha 2013, Eqs. 11–13; Saha's DeNOC; Featherstone's articulated-body algorithm).
 """
 
@@ -59,8 +61,8 @@ def _root_columns(rotation, out):
 
 
 @njit(cache=True)
-def _kinematics(q, index, geometry, floating, rot, vec, block):
-    """Poses, reaches, world axes and body mass matrices M_i about O_i (world axes)."""
+def _poses(q, index, geometry, floating, rot, vec):
+    """Body orientations R_i, origins O_i, reaches r_i = O_i − O_parent, world axes e_i."""
     n = index.shape[0]
     frame = np.empty((3, 3))
     turn = np.empty((3, 3))
@@ -95,9 +97,12 @@ def _kinematics(q, index, geometry, floating, rot, vec, block):
         g = geometry[i]
         for r in range(3):
             for c in range(3):
-                frame[r, c] = (
-                    rot[j, r, 0] * g[3 + c] + rot[j, r, 1] * g[6 + c] + rot[j, r, 2] * g[9 + c]
-                )
+                if index[i, 4]:  # the joint frame is its parent's, turned by nothing
+                    frame[r, c] = rot[j, r, c]
+                else:
+                    frame[r, c] = (
+                        rot[j, r, 0] * g[3 + c] + rot[j, r, 1] * g[6 + c] + rot[j, r, 2] * g[9 + c]
+                    )
             vec[i, _REACH, r] = rot[j, r, 0] * g[12] + rot[j, r, 1] * g[13] + rot[j, r, 2] * g[14]
         for r in range(3):
             vec[i, _AXIS, r] = frame[r, 0] * g[0] + frame[r, 1] * g[1] + frame[r, 2] * g[2]
@@ -131,6 +136,13 @@ def _kinematics(q, index, geometry, floating, rot, vec, block):
                     )
         for r in range(3):
             vec[i, _ORIGIN, r] = vec[j, _ORIGIN, r] + vec[i, _REACH, r]
+
+
+@njit(cache=True)
+def _kinematics(q, index, geometry, floating, rot, vec, block):
+    """Poses, reaches, world axes and body mass matrices M_i about O_i (world axes)."""
+    _poses(q, index, geometry, floating, rot, vec)
+    n = index.shape[0]
     ic = np.empty((3, 3))
     for i in range(0 if floating else 1, n):
         g = geometry[i]
@@ -476,35 +488,83 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
 
 
 @njit(cache=True, error_model="numpy")  # a zero diagonal entry gives δ = inf, not an error
-def gim_diagonal(q, index, geometry, floating, rot, vec, block, out):
+def gim_diagonal(q, index, geometry, floating, rot, vec, comp, out):
     """Diag M(q) = p_iᵀ M̃_i p_i (Shah & Saha 2013, Eqs. 11–13) into ``out``, O(n).
+
+    Only the parts of the composite mass matrix M̃_i that its diagonal reads are carried:
+    the subtree's mass m, first moment h = Σ m_k d_k and rotational inertia I_O about O_i
+    (world axes), ``comp[i] = (m, h, I_xx, I_yy, I_zz, I_xy, I_xz, I_yz)``. Moving a child's
+    from O_c to O_i (r = O_c − O_i): h += m r, I_O += m (|r|² 1 − r rᵀ) + 2 (r·h) 1 − r hᵀ −
+    h rᵀ (h the child's, before the move). M_ii = e_iᵀ I_O e_i (revolute) or m (prismatic);
+    the free-flyer's six are m (linear) and R_kᵀ I_O R_k (angular).
 
     Returns δ = max M_ii / min M_ii (Sec. 4), so that a watch needs nothing else.
     """
-    _kinematics(q, index, geometry, floating, rot, vec, block)
+    _poses(q, index, geometry, floating, rot, vec)
     n = index.shape[0]
+    t = np.empty((3, 3))
     for i in range(0 if floating else 1, n):
-        block[i, 1] = block[i, 0]
-    scratch = np.empty((3, 3))
-    column = np.empty(6)
+        g = geometry[i]
+        m = g[15]
+        r = rot[i]
+        d0 = r[0, 0] * g[16] + r[0, 1] * g[17] + r[0, 2] * g[18]
+        d1 = r[1, 0] * g[16] + r[1, 1] * g[17] + r[1, 2] * g[18]
+        d2 = r[2, 0] * g[16] + r[2, 1] * g[17] + r[2, 2] * g[18]
+        for a in range(3):  # T = R I
+            for k in range(3):
+                t[a, k] = r[a, 0] * g[19 + k] + r[a, 1] * g[22 + k] + r[a, 2] * g[25 + k]
+        dd = d0 * d0 + d1 * d1 + d2 * d2
+        c = comp[i]
+        c[0], c[1], c[2], c[3] = m, m * d0, m * d1, m * d2
+        # I_O = R I Rᵀ + m (|d|² 1 − d dᵀ)
+        c[4] = t[0, 0] * r[0, 0] + t[0, 1] * r[0, 1] + t[0, 2] * r[0, 2] + m * (dd - d0 * d0)
+        c[5] = t[1, 0] * r[1, 0] + t[1, 1] * r[1, 1] + t[1, 2] * r[1, 2] + m * (dd - d1 * d1)
+        c[6] = t[2, 0] * r[2, 0] + t[2, 1] * r[2, 1] + t[2, 2] * r[2, 2] + m * (dd - d2 * d2)
+        c[7] = t[0, 0] * r[1, 0] + t[0, 1] * r[1, 1] + t[0, 2] * r[1, 2] - m * d0 * d1
+        c[8] = t[0, 0] * r[2, 0] + t[0, 1] * r[2, 1] + t[0, 2] * r[2, 2] - m * d0 * d2
+        c[9] = t[1, 0] * r[2, 0] + t[1, 1] * r[2, 1] + t[1, 2] * r[2, 2] - m * d1 * d2
     for i in range(n - 1, 0, -1):
-        kind = index[i, 1]
-        e = vec[i, _AXIS]
-        k = 3 if kind == 3 else 0
-        comp = block[i, 1]
-        for a in range(6):
-            column[a] = comp[a, k] * e[0] + comp[a, k + 1] * e[1] + comp[a, k + 2] * e[2]
-        out[index[i, 3]] = _p_dot(kind, e, column)
+        c = comp[i]
+        e0, e1, e2 = vec[i, _AXIS, 0], vec[i, _AXIS, 1], vec[i, _AXIS, 2]
+        if index[i, 1] == 3:
+            out[index[i, 3]] = c[0]
+        else:
+            out[index[i, 3]] = (
+                c[4] * e0 * e0
+                + c[5] * e1 * e1
+                + c[6] * e2 * e2
+                + 2.0 * (c[7] * e0 * e1 + c[8] * e0 * e2 + c[9] * e1 * e2)
+            )
         j = index[i, 0]
         if j > 0 or floating:
-            add_shift_congruence(block[j, 1], comp, vec[i, _REACH], scratch)
+            p = comp[j]
+            r0, r1, r2 = vec[i, _REACH, 0], vec[i, _REACH, 1], vec[i, _REACH, 2]
+            m, h0, h1, h2 = c[0], c[1], c[2], c[3]
+            rr = r0 * r0 + r1 * r1 + r2 * r2
+            rh = r0 * h0 + r1 * h1 + r2 * h2
+            p[0] += m
+            p[1] += h0 + m * r0
+            p[2] += h1 + m * r1
+            p[3] += h2 + m * r2
+            p[4] += c[4] + m * (rr - r0 * r0) + 2.0 * (rh - r0 * h0)
+            p[5] += c[5] + m * (rr - r1 * r1) + 2.0 * (rh - r1 * h1)
+            p[6] += c[6] + m * (rr - r2 * r2) + 2.0 * (rh - r2 * h2)
+            p[7] += c[7] - m * r0 * r1 - r0 * h1 - h0 * r1
+            p[8] += c[8] - m * r0 * r2 - r0 * h2 - h0 * r2
+            p[9] += c[9] - m * r1 * r2 - r1 * h2 - h1 * r2
     if floating:
-        system = np.empty((6, 6))
-        columns = np.empty((6, 6))
-        _root_system(rot[0], block[0, 1], columns, system)
         k = index[0, 3]
-        for a in range(6):
-            out[k + a] = system[a, a]
+        c = comp[0]
+        r = rot[0]
+        for a in range(3):
+            out[k + a] = c[0]
+            x, y, z = r[0, a], r[1, a], r[2, a]
+            out[k + 3 + a] = (
+                c[4] * x * x
+                + c[5] * y * y
+                + c[6] * z * z
+                + 2.0 * (c[7] * x * y + c[8] * x * z + c[9] * y * z)
+            )
     largest, smallest = out[0], out[0]
     for k in range(out.shape[0]):
         largest = max(largest, out[k])

@@ -44,7 +44,16 @@ class LeanModel:
         n = tree.size
         self.tree, self.nq, self.nv, self.floating = tree, int(nq), int(nv), bool(tree.floating)
         self._index = np.ascontiguousarray(
-            np.column_stack([tree.parent, tree.kind, q_index, v_index]), dtype=np.int64
+            np.column_stack(
+                [
+                    tree.parent,
+                    tree.kind,
+                    q_index,
+                    v_index,
+                    np.all(tree.placement_rotation == np.eye(3), axis=(1, 2)),
+                ]
+            ),
+            dtype=np.int64,
         )
         self._geometry = np.ascontiguousarray(
             np.column_stack(
@@ -66,13 +75,14 @@ class LeanModel:
         self._scal = np.ones((n, 2))
         self._root = np.ones((7, 6))
         self._diag = np.empty(self.nv)
+        self._comp = np.zeros((n, 10))
         self._configured = False
 
     def gim_diagonal(self, q: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Diag M(q) (Shah & Saha 2013, Eqs. 11–13), O(n), one compiled call."""
         out = np.empty(self.nv) if out is None else out
         fused.gim_diagonal(
-            q, self._index, self._geometry, self.floating, self._rot, self._vec, self._block, out
+            q, self._index, self._geometry, self.floating, self._rot, self._vec, self._comp, out
         )
         return out
 
@@ -86,7 +96,7 @@ class LeanModel:
                 self.floating,
                 self._rot,
                 self._vec,
-                self._block,
+                self._comp,
                 self._diag,
             )
         )

@@ -88,6 +88,7 @@ class _Operator:
     ) -> None:
         self.apply, self.n, self.keep, self.which = apply, n, keep, which
         self.block: np.ndarray | None = None
+        self.previous: np.ndarray | None = None  # the sample before's leading vector
         self.theta = math.nan
         self.count = 0
 
@@ -377,7 +378,9 @@ class KappaTracker:
         fallback = ""
         result = None
         if end.block is not None:
-            starts = [*end.block.T, self._probe()]
+            # the last two leading vectors span the extrapolation of the eigenvector's motion
+            extra = [] if end.previous is None else [end.previous]
+            starts = [*end.block.T, *extra, self._probe()]
             theta, block, estimate, ok = leading(starts, self.warm_products)
             moved = abs(theta - end.theta) > self.jump * abs(end.theta)
             if ok and not moved:
@@ -396,6 +399,7 @@ class KappaTracker:
                 f"the κ tracker did not converge in {self.max_products} products "
                 "and has no dense fallback"
             )
+        end.previous = None if end.block is None else end.block[:, -1].copy()
         end.theta, end.block = result[0], result[1]
         return result[0], end.count - before, fallback, result[2]
 
