@@ -131,18 +131,18 @@ MUTANTS = (
     Mutant(
         "compiled-gravity-1e-10",
         "gimwatch/denoc/compiled.py",
-        "a[3 + k] = -gravity[k]",
-        "a[3 + k] = -gravity[k] * (1.0 + 1e-10)",
-        LONG + STRESS_QUICK[:1] + ("-m", "not slow"),
-        "gravity 1e-10 too strong in the O(n) forward dynamics",
+        "force[i, k] = mass[i] * (a_com[k] + a[k] + t1[k] - gravity[k])",
+        "force[i, k] = mass[i] * (a_com[k] + a[k] + t1[k] - gravity[k] * (1.0 + 1e-10))",
+        DENOC,
+        "gravity 1e-10 too strong in the compiled inverse dynamics (DeNOC's τ, fixed base)",
     ),
     Mutant(
         "compiled-prismatic-coriolis",
         "gimwatch/denoc/compiled.py",
-        "bias_acc[i, 3 + k] += 2.0 * t1[k] * qd[i]",
-        "bias_acc[i, 3 + k] += 1.0 * t1[k] * qd[i]",
-        LONG,
-        "Coriolis term of prismatic joints halved (compiled)",
+        "a[k] += e[i, k] * qdd[i] + 2.0 * t1[k] * qd[i]",
+        "a[k] += e[i, k] * qdd[i] + 1.0 * t1[k] * qd[i]",
+        DENOC,
+        "Coriolis term of prismatic joints halved (compiled inverse dynamics)",
     ),
     # --- mpmath references ---
     Mutant(
