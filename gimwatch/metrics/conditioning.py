@@ -19,10 +19,12 @@ Metrics (Shah & Saha 2013):
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.errors import ConditioningError, InputError
+from gimwatch.errors import ConditioningError, IllConditionedWarning, InputError
 
 __all__ = [
     "ScaledDiagonalRatio",
@@ -225,3 +227,27 @@ def condition_estimate_1norm(matrix: npt.ArrayLike) -> float:
     if info != 0 or rcond <= 0:
         raise ConditioningError(f"LAPACK dpocon failed (info = {info}, rcond = {rcond})")
     return float(1.0 / rcond)
+
+
+#: ``IllConditionedWarning`` is issued when κ·eps reaches this value: a solve with M then keeps
+#: fewer than two significant digits (relative error bound κ·eps, eps = 2.2e-16 in float64).
+ILL_CONDITIONED_KAPPA_EPS = 1e-2
+
+
+def warn_if_ill_conditioned(kappa: float, *, where: str, stacklevel: int = 2) -> bool:
+    """Issue ``IllConditionedWarning`` when κ·eps ≥ :data:`ILL_CONDITIONED_KAPPA_EPS`.
+
+    ``where`` names what M belongs to (robot, configuration) and starts the message.
+    Returns True when the warning was issued.
+    """
+    product = float(kappa) * float(np.finfo(float).eps)
+    if not product >= ILL_CONDITIONED_KAPPA_EPS:
+        return False
+    warnings.warn(
+        f"{where}: M is ill-conditioned: kappa = {kappa:.3g}, kappa*eps = {product:.2g} "
+        f">= {ILL_CONDITIONED_KAPPA_EPS:g}; results computed with M keep fewer than two "
+        "significant digits",
+        IllConditionedWarning,
+        stacklevel=stacklevel + 1,
+    )
+    return True

@@ -15,6 +15,7 @@ from gimwatch.metrics.conditioning import (
     eigenvalues,
     ldlt_pivots,
     udut_pivots,
+    warn_if_ill_conditioned,
 )
 from gimwatch.model.inertia import gim
 from gimwatch.model.robots import Robot, as_configuration
@@ -105,11 +106,13 @@ def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAn
     values = eigenvalues(M)
     diag = np.diag(M)
     forward, backward = ldlt_pivots(M), udut_pivots(M)
+    kappa = float(values[-1] / values[0])
+    warn_if_ill_conditioned(kappa, where=robot.name)
     return GimAnalysis(
         robot=robot.name,
         nv=robot.nv,
         q=tuple(float(x) for x in q),
-        kappa=float(values[-1] / values[0]),
+        kappa=kappa,
         diagonal_ratio=diagonal_ratio(diag),
         pivot_ratio_forward=float(forward.max() / forward.min()),
         pivot_ratio_backward=float(backward.max() / backward.min()),
