@@ -292,8 +292,8 @@ MUTANTS = (
     Mutant(
         "denoc-potential-sign",
         "gimwatch/denoc/model.py",
-        "potential = -float(self.linear._mass @",
-        "potential = float(self.linear._mass @",
+        "potential = -float(self.tree.mass[1:] @",
+        "potential = float(self.tree.mass[1:] @",
         LONG,
         "DeNOC's gravity potential with the wrong sign",
     ),

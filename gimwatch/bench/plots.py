@@ -27,10 +27,7 @@ EPS = float(np.finfo(float).eps)
 
 
 def _figure():
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # no pyplot: leaves the user's backend alone
 
     return Figure(figsize=(7.0, 4.5), layout="constrained")
 
@@ -163,9 +160,6 @@ def plot_denoc_cost(rows: list[dict], path: Path) -> Path:
 
 def plot_work_precision(rows: list[dict], path: Path) -> Path:
     """Final-state error against wall time, one panel per chain, one line per method."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
     chains = list(dict.fromkeys(r["n"] for r in rows))

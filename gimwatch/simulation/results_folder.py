@@ -97,18 +97,14 @@ def _csv(header: list[str], columns: list[np.ndarray]) -> str:
 
 
 def _plots(trajectory: Trajectory, folder: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # no pyplot: leaves the user's backend alone
 
     from gimwatch.output import figures as plots
 
     def save(name, draw):
-        fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
-        draw(ax)
+        fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+        draw(fig.subplots())
         fig.savefig(folder / name, dpi=110)
-        plt.close(fig)
 
     t, watch = trajectory.t, trajectory.watch
     save("joints.png", lambda ax: plots.plot_joint_angles(t, trajectory.q, ax=ax))
