@@ -70,20 +70,20 @@ MUTANTS = (
         "composite mass matrices (Eq. 12) pass half the child's inertia",
     ),
     Mutant(
-        "denoc-diagonal-1e-9",
-        "gimwatch/denoc/recursions.py",
-        'return np.einsum("ki,kij,kj->k", columns, composite[body], columns)',
-        'return np.einsum("ki,kij,kj->k", columns, composite[body], columns) * (1 + 1e-9)',
+        "denoc-diagonal-first-moment",
+        "gimwatch/denoc/fused.py",
+        "p[6] += c[6] + m * (rr - r2 * r2) + 2.0 * (rh - r2 * h2)",
+        "p[6] += c[6] + m * (rr - r2 * r2) + 1.0 * (rh - r2 * h2)",
         DENOC,
-        "diag M off by 1e-9 relative",
+        "O(n) diagonal (fused): the child's first moment enters the shift once, not twice",
     ),
     Mutant(
         "denoc-prismatic-coriolis",
-        "gimwatch/denoc/recursions.py",
-        "pri * 2.0 * cross(w, axis_rate)",
-        "pri * 1.0 * cross(w, axis_rate)",
+        "gimwatch/denoc/fused.py",
+        "c[3 + a] += 2.0 * t1[a] * qd",
+        "c[3 + a] += 1.0 * t1[a] * qd",
         DENOC,
-        "Coriolis term of prismatic joints halved",
+        "Coriolis term of prismatic joints halved (fused forward dynamics)",
     ),
     Mutant(
         "denoc-articulated-pass",
@@ -94,12 +94,20 @@ MUTANTS = (
         "articulated inertia passed to the parent with half the correction",
     ),
     Mutant(
-        "denoc-gravity-sign",
-        "gimwatch/denoc/recursions.py",
-        "return np.concatenate([np.zeros(3), -np.asarray(gravity, dtype=float)])",
-        "return np.concatenate([np.zeros(3), np.asarray(gravity, dtype=float)])",
-        DENOC,
-        "gravity as a downward base acceleration",
+        "denoc-gravity-1e-10",
+        "gimwatch/denoc/fused.py",
+        "        rate0[3 + a] = -gravity[a]\n    if floating:",
+        "        rate0[3 + a] = -gravity[a] * (1.0 + 1e-10)\n    if floating:",
+        STRESS_QUICK,
+        "gravity 1e-10 too strong in DeNOC's forward dynamics (fused)",
+    ),
+    Mutant(
+        "denoc-factor-1e-12",
+        "gimwatch/denoc/fused.py",
+        "art[a, b] -= u[a] * u[b] / pivot",
+        "art[a, b] -= u[a] * u[b] / (pivot * (1.0 + 1e-12))",
+        STRESS_QUICK,
+        "articulated-body factor off by 1e-12 relative (fused)",
     ),
     # --- compiled O(n) recursions (gimwatch/denoc/compiled.py) ---
     Mutant(
@@ -399,10 +407,11 @@ MUTANTS = (
     Mutant(
         "watch-scaled-recalibrates",
         "gimwatch/metrics/watch.py",
-        "        if not self.estimator.calibrated:\n            self.estimator.calibrate(state.M)\n"
-        "        return self.estimator(state.diag)",
+        "        if not self.estimator.calibrated:\n"
+        "            self.estimator.calibrate(state.M)\n",
         "        self.estimator = conditioning.ScaledDiagonalRatio()\n"
-        "        self.estimator.calibrate(state.M)\n        return self.estimator(state.diag)",
+        "        if not self.estimator.calibrated:\n"
+        "            self.estimator.calibrate(state.M)\n",
         ("tests/test_watch.py",),
         "αδ recalibrated at every sample (then it equals κ, tuned after the fact)",
     ),

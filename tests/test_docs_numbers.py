@@ -306,3 +306,55 @@ def test_crosscheck_table_is_the_committed_run():
         if r["qdd_rel_err"] is not None
     )
     assert forward.groups() == (f"{value:.2g}", robot, f"{kappa:.2g}".replace("+0", ""))
+
+
+def test_long_chain_step_costs_are_the_committed_run():
+    rows = {(int(r["n"]), r["method"]): r for r in _csv("longchain_step.csv")}
+
+    def ratio(n):
+        return float(rows[(n, "denoc_compiled")]["ratio_to_aba"])
+
+    def ms(n):
+        return 1e3 * float(rows[(n, "denoc_compiled")]["median_s"])
+
+    match = _find(
+        "docs/findings/long-chains.md",
+        r"Pinocchio ABA = ([\d.]+) at n = 10 \(call overhead\), ([\d.]+) at n = 100, ([\d.]+) at "
+        r"n = 400 \(the\s+largest Pinocchio Data allowed here\); DeNOC alone ([\d.]+) ms at "
+        r"n = 1,000 and ([\d.]+) ms at\s+n = 10,000",
+    )
+    assert _numbers(match) == [
+        round(ratio(10), 1),
+        round(ratio(100), 1),
+        round(ratio(400), 2),
+        round(ms(1000), 2),
+        round(ms(10000), 1),
+    ]
+
+
+def test_claims_quote_the_stress_table():
+    crba_200 = test_stress.PUBLISHED_ERRORS["straight-200"][1]
+    match = _find("docs/findings/claims.md", r"\(([\d.e-]+) on a 200-link chain\)")
+    assert float(match.group(1)) == float(f"{crba_200:.0e}")
+    kappa = max(
+        float(row.split("|")[3])
+        for row in _table_rows(_text("benchmarks/stress.md"), set(test_stress.PUBLISHED_ERRORS))
+        if float(row.split("|")[3]) < 1e15  # tapered-30 (8e19) is past float64's reach
+    )
+    worst = max(e for row in test_stress.PUBLISHED_ERRORS.values() for e in row[::2] if e)
+    straight = max(
+        e
+        for name, row in test_stress.PUBLISHED_ERRORS.items()
+        if name.startswith("straight")
+        for e in row[::2]
+        if e
+    )
+    match = _find(
+        "docs/findings/claims.md",
+        r"stay within\s+([\d.e-]+) \(([\d.e-]+) on straight chains\) up to κ ≈ ([\d.e+]+)",
+    )
+    assert _numbers(match) == [
+        float(f"{worst:.0e}"),
+        float(f"{10 ** np.ceil(np.log10(straight)):.0e}"),
+        float(f"{kappa:.0e}"),
+    ]
