@@ -154,7 +154,7 @@ class Torque(Effect):
 
     name = "torque"
     parameters = (
-        Parameter("law", "string", required=True, choices=tuple(TORQUE_LAWS), doc="the torque law"),
+        Parameter("law", "string", required=True, choices=TORQUE_LAWS, doc="the torque law"),
     )
 
     def __init__(self, robot: Robot, params: dict[str, Any], *, source: str) -> None:

@@ -9,6 +9,7 @@ or law declares its keys in one place.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,7 +19,7 @@ __all__ = ["KINDS", "Parameter"]
 KINDS = ("number", "joint", "configuration", "vector3", "string")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Parameter:
     """One key of an effect's or torque law's table.
 
@@ -32,7 +33,7 @@ class Parameter:
         default: Value when the key is absent (None: absent stays absent).
         positive: A number must be > 0.
         nonnegative: Every number must be >= 0.
-        choices: Allowed strings.
+        choices: Allowed strings (a registry dict stays live: its keys at read time).
         doc: One line for the scene reference (units included).
     """
 
@@ -42,7 +43,7 @@ class Parameter:
     default: Any = None
     positive: bool = False
     nonnegative: bool = False
-    choices: tuple[str, ...] = ()
+    choices: Collection[str] = ()
     doc: str = ""
 
     def __post_init__(self) -> None:

@@ -4,8 +4,9 @@ A scene is a TOML file read with :mod:`tomllib` and validated once, into frozen
 dataclasses. Unknown keys, wrong types, wrong lengths, negative durations, unknown effect,
 metric, joint or link names are :class:`~gimwatch.errors.SceneError` naming the file and
 the key (``scene.toml: effects.spring.stiffness: ...``). The schema is documented in the
-docs (``docs/guide/simulate.md``); :data:`EFFECT_KEYS` and :data:`METRIC_NAMES` are the
-registries' names.
+docs (``docs/scenes.md``, generated from the registries). Names are looked up in the live
+registries at parse time; :data:`EFFECT_KEYS`, :data:`METRIC_NAMES` and the other tuples
+are the names registered at import.
 
 Joint-indexed values (``q``, ``v``, damping, stiffness, torques, targets) are given as a
 number (broadcast to every coordinate), a list (one per coordinate) or a table keyed by
@@ -58,18 +59,19 @@ METRIC_NAMES = tuple(METRICS)
 ON_ALARM_ACTIONS = tuple(ALARM_ACTIONS)
 TORQUE_LAW_NAMES = tuple(TORQUE_LAWS)
 
-#: Each effect's keys: name -> (required keys, optional keys).
+
+def _effect_keys(name: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """An effect's (required, optional) keys, from the live registries."""
+    parameters = EFFECTS[name].parameters
+    optional = tuple(p.name for p in parameters if not p.required)
+    if name == "torque":  # every law's keys; the law's own are checked once it is known
+        optional += tuple(sorted({p.name for law in TORQUE_LAWS.values() for p in law.parameters}))
+    return tuple(p.name for p in parameters if p.required), optional
+
+
+#: Each effect's keys: name -> (required keys, optional keys), as registered at import.
 EFFECT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    name: (
-        tuple(p.name for p in cls.parameters if p.required),
-        tuple(p.name for p in cls.parameters if not p.required)
-        + (
-            tuple(sorted({p.name for law in TORQUE_LAWS.values() for p in law.parameters}))
-            if name == "torque"
-            else ()
-        ),
-    )
-    for name, cls in EFFECTS.items()
+    name: _effect_keys(name) for name in EFFECTS
 }
 _TOP_KEYS = {
     "robot",
@@ -291,7 +293,7 @@ def _parameter(table: _Reader, parameter: Parameter) -> Any:
         return table.joint_values(name, parameter.default, nonnegative=parameter.nonnegative)
     if kind == "vector3":
         return table.vector3(name, parameter.default)
-    return table.string(name, parameter.default, choices=parameter.choices)
+    return table.string(name, parameter.default, choices=tuple(parameter.choices))
 
 
 def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
@@ -300,7 +302,7 @@ def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
         if name not in EFFECTS:
             raise reader.fail(name, f"unknown effect; expected one of {', '.join(EFFECTS)}")
         table = reader.sub(name)
-        required, optional = EFFECT_KEYS[name]
+        required, optional = _effect_keys(name)
         table.check_keys(set(required) | set(optional), required)
         params: dict[str, Any] = {}
         for parameter in EFFECTS[name].parameters:
@@ -348,11 +350,11 @@ def _watch(reader: _Reader) -> WatchSpec:
     if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
         raise reader.fail("metrics", f"must be a list of metric names, got {metrics!r}")
     for metric in metrics:
-        if metric not in METRIC_NAMES:
+        if metric not in METRICS:
             raise reader.fail(
                 "metrics",
-                f"unknown metric {metric!r}; expected one of {', '.join(METRIC_NAMES)}"
-                + did_you_mean(metric, METRIC_NAMES),
+                f"unknown metric {metric!r}; expected one of {', '.join(METRICS)}"
+                + did_you_mean(metric, tuple(METRICS)),
             )
     if len(set(metrics)) != len(metrics):
         raise reader.fail("metrics", f"lists a metric twice: {metrics!r}")
@@ -366,7 +368,7 @@ def _watch(reader: _Reader) -> WatchSpec:
             )
         if threshold is None:
             raise reader.fail("alarm_threshold", "is required when alarm_metric is given")
-    on_alarm = reader.string("on_alarm", "warn", choices=ON_ALARM_ACTIONS)
+    on_alarm = reader.string("on_alarm", "warn", choices=tuple(ALARM_ACTIONS))
     return WatchSpec(tuple(metrics), alarm_metric, threshold, on_alarm)
 
 
@@ -422,7 +424,7 @@ def parse_scene(
         v=reader.joint_values("v", 0.0, bound=MAX_INITIAL_STATE),
         effects=_effects(reader.sub("effects")),
         integrator=integrator,
-        backend=dynamics.string("backend", "aba", choices=BACKENDS),
+        backend=dynamics.string("backend", "aba", choices=tuple(BACKEND_CLASSES)),
         watch=_watch(reader.sub("watch")),
         raw=table,
     )
