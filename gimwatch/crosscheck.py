@@ -18,7 +18,8 @@ GIM, diagonal and τ (well-conditioned) must agree within the tolerance; for q̈
 and the forward errors of q̈ and of the pivots within ``max(tolerance, κ₂(M)·ε)`` at each
 sample (ε = 2.2e-16), the round-off floor of any backward-stable elimination.
 
-When M(q) is singular (a joint that moves no mass), q̈ is undefined:
+M(q) is called singular only when numerically rank-deficient, λmin <= nv·ε·λmax (a joint
+that moves no mass, redundant coordinates); then q̈ is undefined:
 Pinocchio's ABA returns NaN and DeNOC refuses, so only the GIM, τ and the pivots (their
 zeros and the NaNs after them must coincide) are compared.
 """
@@ -31,7 +32,12 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
-from gimwatch.model.robots import Robot, random_configurations
+from gimwatch.model.robots import (
+    PLACEHOLDER_LIMIT,
+    Robot,
+    placeholder_limit_joints,
+    random_configurations,
+)
 
 __all__ = ["CrossCheckResult", "crosscheck_robot", "denoc_model"]
 
@@ -61,23 +67,30 @@ class CrossCheckResult:
         tolerance: The tolerance the errors were held to.
         passed: GIM, diagonal, τ and the q̈ backward error within the tolerance; q̈ and
             pivot forward errors within max(tolerance, κ·ε) at every sample.
-        note: Why a quantity was not compared, or "".
+        note: Why a quantity was not compared, and which limits were placeholders, or "".
+        mujoco_gim_rel_err: Worst error of MuJoCo's ``mj_fullM`` (in Pinocchio's
+            coordinates) against ``crba``; None without ``peer="mujoco"``.
+        placeholder_limits: Joints whose placeholder limits were replaced by ±π rad / ±1 m.
+        mujoco_refusal: Why MuJoCo refused the robot (the link and its reason), or "".
     """
 
     robot: str
     floating: bool
     nv: int
     samples: int
-    gim_rel_err: float
-    gim_diagonal_rel_err: float
-    tau_rel_err: float
+    gim_rel_err: float | None
+    gim_diagonal_rel_err: float | None
+    tau_rel_err: float | None
     qdd_rel_err: float | None
     qdd_backward_err: float | None
-    pivots_rel_err: float
+    pivots_rel_err: float | None
     kappa_max: float
     tolerance: float
     passed: bool
     note: str = ""
+    mujoco_gim_rel_err: float | None = None
+    placeholder_limits: tuple[str, ...] = ()
+    mujoco_refusal: str = ""
 
     def to_dict(self) -> dict:
         """The record as a plain dict (for JSON)."""
@@ -114,33 +127,77 @@ def _pivot_error(pivots: np.ndarray, reference: np.ndarray) -> tuple[float, bool
     return _relative(pivots[start:], reference[start:]), True
 
 
+def _singular_joints(robot: Robot, M: np.ndarray) -> str:
+    """The joints of the null direction of a rank-deficient M (largest components)."""
+    _, vectors = np.linalg.eigh(M)
+    null = np.abs(vectors[:, 0])
+    dofs = [robot.dof_names[k] for k in np.flatnonzero(null >= 0.1 * null.max())]
+    return ", ".join(dofs[:6]) + (", ..." if len(dofs) > 6 else "")
+
+
 def crosscheck_robot(
     robot: Robot,
     *,
     samples: int = 10,
     seed: int = 0,
     tolerance: float = DEFAULT_TOLERANCE,
+    peer: str | None = None,
 ) -> CrossCheckResult:
-    """Compare DeNOC with Pinocchio at ``samples`` seeded random states of ``robot``.
+    """Compare DeNOC (and MuJoCo) with Pinocchio at ``samples`` seeded random states.
+
+    M(q) is called singular only when it is numerically rank-deficient:
+    λ_min(M) <= nv·ε·λ_max(M). Otherwise q̈ is compared within max(tolerance, κ·ε).
+    DeNOC reads URDF only: for an MJCF robot the reference is MuJoCo (``peer`` is forced
+    to ``"mujoco"``) and the DeNOC errors are None.
 
     Args:
         robot: The robot (fixed or floating base, as loaded).
         samples: Number of random states, >= 1.
         seed: Seed of the configurations and of v, a, τ.
         tolerance: Largest relative error that passes.
+        peer: ``"mujoco"`` to compare MuJoCo's ``mj_fullM`` with ``pinocchio.crba`` too.
+
+    Raises:
+        MujocoRefusal: MuJoCo refuses an inertia of the robot (the link is named).
     """
     model, data = robot.model, robot.new_data()
-    dm = denoc_model(robot)
+    use_denoc = bool(robot.urdf_xml)
+    peer = "mujoco" if not use_denoc else peer
+    dm = denoc_model(robot) if use_denoc else None
+    mj_model, refusal = None, ""
+    if peer == "mujoco":
+        from gimwatch.model.mujoco_model import MujocoRefusal, compile_robot
+
+        try:
+            mj_model = compile_robot(robot)
+        except MujocoRefusal as exc:
+            if not use_denoc:  # no reference left to compare with
+                raise
+            refusal = exc.problem
     rng = np.random.default_rng(seed)
-    errors = dict.fromkeys(("gim", "diag", "tau", "qdd", "backward", "pivots"), 0.0)
-    kappa_max, singular, conditioned_ok = 0.0, False, True
+    errors = dict.fromkeys(("gim", "diag", "tau", "qdd", "backward", "pivots", "mujoco"), 0.0)
+    kappa_max, conditioned_ok, singular_note = 0.0, True, ""
     for q in random_configurations(robot, samples, seed=seed):
         v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
         upper = np.triu(pin.crba(model, data, q))
         M_ref = upper + np.triu(upper, 1).T
         eigenvalues = np.linalg.eigvalsh(M_ref)
-        kappa = eigenvalues[-1] / eigenvalues[0] if eigenvalues[0] > 0 else np.inf
+        rank_deficient = eigenvalues[0] <= robot.nv * _EPS * eigenvalues[-1]
+        kappa = np.inf if rank_deficient else eigenvalues[-1] / eigenvalues[0]
         kappa_max = max(kappa_max, float(kappa))
+        if mj_model is not None:
+            from gimwatch.model.mujoco_model import pinocchio_mass_matrix
+
+            M_mj = pinocchio_mass_matrix(robot, mj_model, q)
+            errors["mujoco"] = max(errors["mujoco"], _relative(M_mj, M_ref))
+        if rank_deficient and not singular_note:
+            singular_note = (
+                f"M(q) is singular at a sample (λmin = {eigenvalues[0]:.3g} <= nv·ε·λmax = "
+                f"{robot.nv * _EPS * eigenvalues[-1]:.3g}; null direction on "
+                f"{_singular_joints(robot, M_ref)}): q̈ is undefined and not compared"
+            )
+        if dm is None:
+            continue
         errors["gim"] = max(errors["gim"], _relative(dm.gim(q), M_ref))
         errors["diag"] = max(errors["diag"], _relative(dm.gim_diagonal(q), np.diag(M_ref)))
         tau_ref = np.array(pin.rnea(model, data, q, v, a))
@@ -148,12 +205,13 @@ def crosscheck_robot(
         pin.crba(model, data, q)
         pin.cholesky.decompose(model, data)
         pivots = dm.forward_dynamics_pivots(q)
-        pivot_error, singular_here = _pivot_error(pivots, np.array(data.D))
-        errors["pivots"] = max(errors["pivots"], pivot_error)
-        if singular_here:
-            singular = True
+        if rank_deficient:
+            pivot_error, _ = _pivot_error(pivots, np.array(data.D))
+            errors["pivots"] = max(errors["pivots"], pivot_error)
             conditioned_ok &= pivot_error <= tolerance  # the pivots before the zero one
             continue
+        pivot_error = _relative(pivots, np.array(data.D))
+        errors["pivots"] = max(errors["pivots"], pivot_error)
         allowed = max(tolerance, float(kappa) * _EPS)
         conditioned_ok &= pivot_error <= allowed
         qdd_ref = np.array(pin.aba(model, data, q, v, tau))
@@ -165,11 +223,27 @@ def crosscheck_robot(
             eigenvalues[-1] * np.linalg.norm(qdd_ref)
         )
         errors["backward"] = max(errors["backward"], float(backward))
-    note = ""
-    if singular:
+    notes = []
+    if not use_denoc:
+        notes.append("DeNOC reads URDF only: Pinocchio's M is compared with MuJoCo's")
+        for key in ("gim", "diag", "tau", "qdd", "backward", "pivots"):
+            errors[key] = None
+    elif singular_note:
         errors["qdd"] = errors["backward"] = None
-        note = "M(q) is singular (a joint moves no mass): q̈ is undefined and not compared"
-    compared = [errors[k] for k in ("gim", "diag", "tau", "backward")]
+    if refusal:
+        notes.append(f"{refusal}; M not compared with MuJoCo")
+    if singular_note:
+        notes.append(singular_note)
+    placeholders = placeholder_limit_joints(robot)
+    if placeholders:
+        shown = ", ".join(placeholders[:4]) + (", ..." if len(placeholders) > 4 else "")
+        notes.append(
+            f"placeholder limits (|limit| >= {PLACEHOLDER_LIMIT:g} or none) sampled in ±π rad / "
+            f"±1 m: {shown}"
+        )
+    if mj_model is None:
+        errors["mujoco"] = None
+    compared = [errors[k] for k in ("gim", "diag", "tau", "backward", "mujoco")]
     passed = conditioned_ok and all(e <= tolerance for e in compared if e is not None)
     return CrossCheckResult(
         robot=robot.name,
@@ -185,5 +259,8 @@ def crosscheck_robot(
         kappa_max=kappa_max,
         tolerance=tolerance,
         passed=bool(passed),
-        note=note,
+        note="; ".join(notes),
+        mujoco_gim_rel_err=errors["mujoco"],
+        placeholder_limits=placeholders,
+        mujoco_refusal=refusal,
     )

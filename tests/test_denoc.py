@@ -264,7 +264,9 @@ def test_example_robot_matches_pinocchio(name, floating):
     if name in SINGULAR_GIM:
         assert result.qdd_rel_err is None and "singular" in result.note
     else:
-        assert result.qdd_backward_err <= BACKWARD_LIMIT and result.note == ""
+        # nothing skipped: the note may only list placeholder limits
+        assert result.qdd_backward_err <= BACKWARD_LIMIT, result
+        assert "not compared" not in result.note and "singular" not in result.note, result.note
 
 
 def test_default_order_is_by_name_and_permutes_to_pinocchio():

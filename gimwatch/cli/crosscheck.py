@@ -34,6 +34,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=DEFAULT_TOLERANCE,
         help="largest relative error that passes",
     )
+    parser.add_argument(
+        "--peer",
+        choices=("mujoco",),
+        default=None,
+        help="also compare MuJoCo's mj_fullM with Pinocchio's crba (MJCF robots: always)",
+    )
     add_output_arguments(parser, what="robots")
 
 
@@ -49,19 +55,26 @@ def _print(results: list[CrossCheckResult], args: argparse.Namespace) -> None:
     if args.csv:
         print(csv_text(records, CSV_COLUMNS))
         return
-    headers = ["robot", "base", "nv", "GIM", "diag", "tau", "qdd", "qdd bwd", "pivots", "kappa"]
+    headers = ["robot", "base", "nv", "GIM", "diag", "tau", "qdd", "qdd bwd", "pivots"]
+    fields = [
+        "gim_rel_err",
+        "gim_diagonal_rel_err",
+        "tau_rel_err",
+        "qdd_rel_err",
+        "qdd_backward_err",
+        "pivots_rel_err",
+    ]
+    if any(r.mujoco_gim_rel_err is not None for r in results):
+        headers.append("M mujoco")
+        fields.append("mujoco_gim_rel_err")
+    headers.append("kappa")
+    fields.append("kappa_max")
     rows = [
         [
             r.robot + ("" if r.passed else "  FAIL"),
             "floating" if r.floating else "fixed",
             r.nv,
-            r.gim_rel_err,
-            r.gim_diagonal_rel_err,
-            r.tau_rel_err,
-            "n/a" if r.qdd_rel_err is None else r.qdd_rel_err,
-            "n/a" if r.qdd_backward_err is None else r.qdd_backward_err,
-            r.pivots_rel_err,
-            r.kappa_max,
+            *("n/a" if getattr(r, f) is None else getattr(r, f) for f in fields),
         ]
         for r in results
     ]
@@ -96,12 +109,17 @@ def run(args: argparse.Namespace) -> int:
                 robot = robots[i - 1]
             results.append(
                 crosscheck_robot(
-                    robot, samples=args.samples, seed=args.seed, tolerance=args.tolerance
+                    robot,
+                    samples=args.samples,
+                    seed=args.seed,
+                    tolerance=args.tolerance,
+                    peer=args.peer,
                 )
             )
     except KeyboardInterrupt:
         if results:
             _print(results, args)
         raise
-    _print(results, args)
+    if results:
+        _print(results, args)
     return 0 if all(r.passed for r in results) else 1

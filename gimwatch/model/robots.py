@@ -4,7 +4,12 @@ A specification is one of:
 
 * ``chain:N`` — the paper's chain of N slender rods (2.2 kg, 1 m), generated on the fly;
 * a path to a URDF file;
+* a path to an MJCF file (``.xml`` whose root element is ``<mujoco>``), read by
+  Pinocchio's MJCF parser (``pinocchio.buildModelFromMJCF``);
 * the name of a robot in example-robot-data (``ur5``, ``panda``, ``talos_arm``, ...).
+
+DeNOC reads URDF only: an MJCF robot has ``urdf_xml == ""`` and its text in ``mjcf_xml``;
+``gimwatch crosscheck`` then compares Pinocchio with MuJoCo (docs/robots.md).
 
 The base is fixed unless ``floating=True``, which adds Pinocchio's free-flyer root joint.
 No :class:`pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
@@ -17,6 +22,7 @@ import contextlib
 import difflib
 import os
 import re
+import sys
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -32,11 +38,14 @@ from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
 
 __all__ = [
     "Robot",
+    "captured_c_output",
     "chain_robot",
     "example_robot_names",
+    "is_mjcf",
     "load_robot",
     "neutral_configuration",
     "parse_chain_spec",
+    "placeholder_limit_joints",
     "random_configurations",
 ]
 
@@ -66,6 +75,7 @@ class Robot:
         source: Where the URDF came from (a path, or ``"<generated chain_N>"``).
         floating: Whether a free-flyer root joint was added.
         chain: The chain spec for generated chains, else None.
+        mjcf_xml: The MJCF text for robots read from MJCF (then ``urdf_xml`` is ""), else "".
     """
 
     name: str
@@ -75,6 +85,7 @@ class Robot:
     source: str
     floating: bool = False
     chain: ChainSpec | None = None
+    mjcf_xml: str = ""
     dof_names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -157,27 +168,32 @@ def _read_urdf(path: Path) -> str:
 
 
 @contextlib.contextmanager
-def _captured_stderr_fd() -> Iterator[list[str]]:
-    """Capture what C++ code (urdfdom's console_bridge) writes to file descriptor 2.
+def captured_c_output(fd: int = 2) -> Iterator[list[str]]:
+    """Capture what C/C++ code (urdfdom, MuJoCo's compiler) writes to file descriptor ``fd``.
 
     Yields a list that holds the captured lines once the block has ended.
     """
     lines: list[str] = []
+    stream = sys.stdout if fd == 1 else sys.stderr
     try:
-        saved = os.dup(2)
-    except OSError:  # no stderr to protect
+        stream.flush()
+        saved = os.dup(fd)
+    except (OSError, ValueError, AttributeError):  # no such stream to protect
         yield lines
         return
     with tempfile.TemporaryFile() as sink:
-        os.dup2(sink.fileno(), 2)
+        os.dup2(sink.fileno(), fd)
         try:
             yield lines
         finally:
-            os.dup2(saved, 2)
+            os.dup2(saved, fd)
             os.close(saved)
             sink.seek(0)
             text = sink.read().decode("utf-8", "replace")
             lines.extend(line.strip() for line in text.splitlines() if line.strip())
+
+
+_captured_stderr_fd = captured_c_output
 
 
 def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
@@ -241,6 +257,76 @@ def _too_deep(spec: str) -> RobotError:
     )
 
 
+def is_mjcf(xml: str) -> bool:
+    """Whether an XML text's root element is ``<mujoco>`` (after comments and declarations)."""
+    return re.match(r"^\s*(<\?[^>]*\?>\s*|<!--.*?-->\s*)*<mujoco\b", xml, re.DOTALL) is not None
+
+
+def with_free_joint(mjcf_xml: str, source: str) -> str:
+    """The MJCF text with ``<freejoint name="root_joint"/>`` in the first body of the world.
+
+    Pinocchio 4's ``buildModelFromMJCF(path, root_joint, name)`` ignores the root joint,
+    and MuJoCo's bodies are fixed unless they have a joint, so a floating base is written
+    into the text for both.
+    """
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(mjcf_xml)
+    except ET.ParseError as exc:
+        raise URDFError(source, f"is not well-formed XML ({exc})") from exc
+    world = root.find("worldbody")
+    body = None if world is None else world.find("body")
+    if body is None:
+        raise URDFError(source, "has no <body> in <worldbody> to put a floating base on")
+    if body.find("freejoint") is not None or body.find("joint[@type='free']") is not None:
+        return mjcf_xml
+    if body.find("joint") is not None:
+        raise URDFError(
+            source,
+            f"its first body '{body.get('name', '')}' already has a joint, so there is no "
+            "base body to float; add a <freejoint/> body around it in the MJCF",
+        )
+    body.insert(0, ET.Element("freejoint", name="root_joint"))
+    return ET.tostring(root, encoding="unicode")
+
+
+def _build_mjcf_model(source: str, floating: bool, xml: str) -> pin.Model:
+    """Pinocchio's MJCF parser on the file ``source``; its complaints become one error."""
+    with _captured_stderr_fd() as complaints, tempfile.TemporaryDirectory() as folder:
+        path = source
+        if floating:
+            path = str(Path(folder) / Path(source).name)
+            Path(path).write_text(with_free_joint(xml, source), encoding="utf-8")
+        try:
+            model = pin.buildModelFromMJCF(path)
+        except Exception as exc:  # boost.python raises RuntimeError, ValueError, ...
+            model, failure = None, exc
+    if model is None:
+        detail = " ".join(str(failure).split()) or type(failure).__name__
+        if complaints:
+            detail += f" ({complaints[0]})"
+        raise URDFError(source, f"Pinocchio cannot read this MJCF: {detail}")
+    return model
+
+
+def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> Robot:
+    model = _build_mjcf_model(source, floating, xml)
+    if model.nv == 0:
+        raise RobotError(
+            spec, "has no degree of freedom with a fixed base; load it with a floating base"
+        )
+    return Robot(
+        name=name,
+        spec=spec,
+        model=model,
+        urdf_xml="",
+        source=source,
+        floating=floating,
+        mjcf_xml=xml,
+    )
+
+
 def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
     """The :class:`ChainSpec` of a ``chain:N`` specification, or None for other specs."""
     match = _CHAIN_SPEC.match(str(spec))
@@ -286,6 +372,8 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
     elif text.lower().endswith((".urdf", ".xml")) or Path(text).exists() or "/" in text:
         path = Path(text)
         xml, source, name = _read_urdf(path), str(path), path.stem
+        if is_mjcf(xml):
+            return _mjcf_robot(xml, source, name, text, floating)
     else:
         close = difflib.get_close_matches(text, _example_robots(), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
@@ -333,10 +421,38 @@ def _unit_block_size(joint: pin.JointModel) -> int:
     return 4 if ("Spherical" in kind or "FreeFlyer" in kind) else 2
 
 
+#: A joint limit this large (or infinite) is a placeholder for "unlimited" (URDF writers put
+#: 1e3 ... 1e16 there); random configurations then use ±π rad / ±1 m instead.
+PLACEHOLDER_LIMIT = 1e3
+
+
+def _is_real_limit(limit: np.ndarray) -> np.ndarray:
+    return np.isfinite(limit) & (np.abs(limit) < PLACEHOLDER_LIMIT)
+
+
+def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
+    """Joints with a coordinate whose limit is a placeholder (|limit| >= 1e3 or infinite).
+
+    :func:`random_configurations` draws those coordinates in ±π rad (angles) or ±1 m
+    (translations, the free-flyer's position included) instead. Continuous joints and
+    quaternions have no limit to read and are not listed.
+    """
+    model = robot.model
+    lower, upper = np.array(model.lowerPositionLimit), np.array(model.upperPositionLimit)
+    names = []
+    for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
+        box = slice(joint.idx_q, joint.idx_q + joint.nq - _unit_block_size(joint))
+        if not (np.all(_is_real_limit(lower[box])) and np.all(_is_real_limit(upper[box]))):
+            names.append(name)
+    return tuple(names)
+
+
 def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = None) -> np.ndarray:
     """Configurations drawn uniformly within the joint limits, shape ``(count, nq)``.
 
-    Unbounded coordinates are drawn in ±π rad (angles) or ±1 m (translations); quaternions
+    Unbounded coordinates, and those whose limit is a placeholder (|limit| >= 1e3, see
+    :func:`placeholder_limit_joints`), are drawn in ±π rad (angles) or ±1 m (translations);
+    quaternions
     and the unit complex numbers of continuous joints are drawn uniformly on their sphere.
 
     Args:
@@ -367,8 +483,8 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
             if joint.shortname().startswith("JointModelR")
             else (_DEFAULT_TRANSLATION_M)
         )
-        lo = np.where(np.isfinite(lower[box]) & (np.abs(lower[box]) < 1e10), lower[box], -default)
-        hi = np.where(np.isfinite(upper[box]) & (np.abs(upper[box]) < 1e10), upper[box], default)
+        lo = np.where(_is_real_limit(lower[box]), lower[box], -default)
+        hi = np.where(_is_real_limit(upper[box]), upper[box], default)
         qs[:, box] = rng.uniform(lo, hi, size=(count, stop - unit - start))
         if unit:
             block = rng.standard_normal((count, unit))

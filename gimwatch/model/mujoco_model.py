@@ -1,0 +1,171 @@
+"""A gimwatch robot compiled in MuJoCo, and MuJoCo's M(q) in Pinocchio's coordinates.
+
+MuJoCo (optional extra ``gimwatch[peers]``, imported lazily) is an independent reference
+for M(q): its own parser, its own tree and its own CRBA (``mj_fullM`` after
+``mj_forward``).
+
+* URDF robots: the text is passed with ``<visual>``/``<collision>`` removed (meshes are not
+  needed for inertia) and one ``<mujoco><compiler .../></mujoco>`` block that keeps the
+  inertias exact: no inertia balancing, no mass or inertia bounds (unless ``inertia_floor``
+  is given), no fused static bodies. A floating base gets ``<freejoint name="root_joint"/>``
+  on the root link (the link Pinocchio's free-flyer moves).
+* MJCF robots: the file as written (its own compiler settings and armature; Pinocchio reads
+  armature too and adds it to M), with a free joint on the first body when floating.
+
+Coordinates are mapped joint by joint, by name: revolute/prismatic angle ↔ hinge/slide;
+a continuous joint's (cos θ, sin θ) ↔ hinge angle θ; Pinocchio's quaternion (x, y, z, w)
+↔ MuJoCo's (w, x, y, z). MuJoCo's free-joint linear velocity is in the world frame,
+Pinocchio's in the base frame: with v_mj = T v_pin (T = R on the linear block), the
+reference is M_pin = Tᵀ M_mj T.
+"""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pinocchio as pin
+
+from gimwatch.errors import InputError, RobotError
+from gimwatch.model.robots import Robot, captured_c_output, with_free_joint
+
+__all__ = ["MujocoRefusal", "compile_robot", "compile_urdf", "mass_matrix", "pinocchio_mass_matrix"]
+
+#: The compiler settings that keep a URDF's inertias exactly as written.
+EXACT_COMPILER = (
+    'balanceinertia="false" boundmass="0" boundinertia="{floor:g}" inertiafromgeom="false" '
+    'fusestatic="false" discardvisual="true" angle="radian"'
+)
+
+
+class MujocoRefusal(RobotError):
+    """MuJoCo refuses to compile the robot (an inertia it rejects, named per link)."""
+
+    def __init__(self, spec: str, link: str, reason: str) -> None:
+        self.link, self.reason = link, reason
+        where = f"link '{link}'" if link else "the model"
+        super().__init__(spec, f"MuJoCo refuses {where}: {reason}")
+
+
+def _refusal(spec: str, exc: Exception) -> MujocoRefusal:
+    text = str(exc)
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    reason = lines[0].removeprefix("Error:").strip() if lines else type(exc).__name__
+    match = re.search(r"Element name '([^']*)'", text)
+    return MujocoRefusal(spec, match.group(1) if match else "", reason)
+
+
+def _import_mujoco():
+    try:
+        import mujoco
+    except ImportError:
+        raise InputError(
+            "--peer mujoco", "MuJoCo installed (pip install 'gimwatch[peers]')", "not installed"
+        ) from None
+    return mujoco
+
+
+def compile_urdf(urdf_xml: str, *, floating: bool = False, inertia_floor: float = 0.0, spec=""):
+    """Compile URDF text in MuJoCo with exact inertias (see the module docstring).
+
+    Raises:
+        MujocoRefusal: MuJoCo rejects an inertia (the link and MuJoCo's reason are kept).
+    """
+    mujoco = _import_mujoco()
+    root = ET.fromstring(urdf_xml)
+    for parent in root.iter():
+        for child in list(parent):
+            if child.tag in ("visual", "collision", "mujoco"):
+                parent.remove(child)
+    extension = ET.fromstring(
+        f"<mujoco><compiler {EXACT_COMPILER.format(floor=inertia_floor)}/></mujoco>"
+    )
+    root.insert(0, extension)
+    if floating:  # MuJoCo folds a link named "world" into its worldbody; keep it a body
+        for element in root.iter():
+            for key in ("name", "link"):
+                if element.tag in ("link", "parent") and element.get(key) == "world":
+                    element.set(key, "world_link")
+    try:
+        with captured_c_output(1), captured_c_output(2):  # MuJoCo prints its warnings
+            model_spec = mujoco.MjSpec.from_string(ET.tostring(root, encoding="unicode"))
+            if floating:
+                model_spec.worldbody.first_body().add_freejoint(name="root_joint")
+            return model_spec.compile()
+    except ValueError as exc:
+        raise _refusal(spec or "<urdf>", exc) from exc
+
+
+def compile_robot(robot: Robot):
+    """The robot's ``mujoco.MjModel`` (URDF or MJCF, floating base as loaded).
+
+    Raises:
+        MujocoRefusal: MuJoCo rejects an inertia or the file.
+    """
+    if not robot.mjcf_xml:
+        return compile_urdf(robot.urdf_xml, floating=robot.floating, spec=robot.spec)
+    mujoco = _import_mujoco()
+
+    xml = with_free_joint(robot.mjcf_xml, robot.source) if robot.floating else robot.mjcf_xml
+    try:
+        with captured_c_output(1), captured_c_output(2):
+            return mujoco.MjModel.from_xml_string(xml)
+    except ValueError as exc:
+        raise _refusal(robot.spec, exc) from exc
+
+
+def _joint_maps(robot: Robot, mj_model, q: np.ndarray, mj_q: np.ndarray, T: np.ndarray) -> None:
+    import mujoco
+
+    model = robot.model
+    for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
+        j = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name)
+        if j < 0:
+            raise RobotError(robot.spec, f"MuJoCo has no joint named '{name}'")
+        qa, va = int(mj_model.jnt_qposadr[j]), int(mj_model.jnt_dofadr[j])
+        iq, iv, kind = joint.idx_q, joint.idx_v, joint.shortname()
+        if "FreeFlyer" in kind:
+            mj_q[qa : qa + 3] = q[iq : iq + 3]
+            mj_q[qa + 3 : qa + 7] = np.roll(q[iq + 3 : iq + 7], 1)
+            rotation = pin.Quaternion(q[iq + 6], *q[iq + 3 : iq + 6]).normalized().matrix()
+            T[va : va + 3, iv : iv + 3] = rotation
+            T[va + 3 : va + 6, iv + 3 : iv + 6] = np.eye(3)
+        elif "Spherical" in kind:
+            mj_q[qa : qa + 4] = np.roll(q[iq : iq + 4], 1)
+            T[va : va + 3, iv : iv + 3] = np.eye(3)
+        elif joint.nq == 2 and joint.nv == 1:  # continuous: (cos, sin)
+            mj_q[qa] = np.arctan2(q[iq + 1], q[iq])
+            T[va, iv] = 1.0
+        elif joint.nq == 1 and joint.nv == 1:
+            mj_q[qa] = q[iq]
+            T[va, iv] = 1.0
+        else:
+            raise RobotError(robot.spec, f"joint '{name}' ({kind}) has no MuJoCo counterpart")
+
+
+def mass_matrix(mj_model, mj_q: np.ndarray) -> np.ndarray:
+    """MuJoCo's dense M: ``mj_fullM`` after ``mj_forward`` at ``mj_q`` (zero velocity)."""
+    import mujoco
+
+    data = mujoco.MjData(mj_model)
+    data.qpos[:] = mj_q
+    mujoco.mj_forward(mj_model, data)
+    M = np.zeros((mj_model.nv, mj_model.nv))
+    mujoco.mj_fullM(mj_model, data, M)
+    return M
+
+
+def pinocchio_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
+    """MuJoCo's M(q) in Pinocchio's velocity coordinates: Tᵀ M_mj T (see module docstring).
+
+    Raises:
+        RobotError: A joint of the robot has no MuJoCo joint of the same name, or the two
+            models have different numbers of velocity coordinates.
+    """
+    if mj_model.nv != robot.nv:
+        raise RobotError(robot.spec, f"MuJoCo has nv = {mj_model.nv}, Pinocchio nv = {robot.nv}")
+    mj_q = np.array(mj_model.qpos0, dtype=float)
+    T = np.zeros((mj_model.nv, robot.nv))
+    _joint_maps(robot, mj_model, np.asarray(q, dtype=float), mj_q, T)
+    return T.T @ mass_matrix(mj_model, mj_q) @ T

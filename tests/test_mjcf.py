@@ -1,0 +1,158 @@
+"""MJCF robots and MuJoCo as an independent reference for M(q) (docs/robots.md)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from gimwatch.crosscheck import crosscheck_robot
+from gimwatch.errors import GimwatchError, URDFError
+from gimwatch.model.mujoco_model import (
+    EXACT_COMPILER,
+    MujocoRefusal,
+    compile_robot,
+    pinocchio_mass_matrix,
+)
+from gimwatch.model.robots import (
+    example_robot_names,
+    load_robot,
+    placeholder_limit_joints,
+    random_configurations,
+)
+
+mujoco = pytest.importorskip("mujoco")
+
+MJCF = Path(__file__).parent / "data" / "mjcf"
+MJCF_FILES = sorted(MJCF.glob("*.xml"))
+
+
+def _crba(robot, q):
+    upper = np.triu(pin.crba(robot.model, robot.model.createData(), q))
+    return upper + np.triu(upper, 1).T
+
+
+def test_there_are_at_least_five_mjcf_models():
+    assert len(MJCF_FILES) >= 5, MJCF_FILES
+
+
+@pytest.mark.parametrize("path", MJCF_FILES, ids=[p.stem for p in MJCF_FILES])
+def test_mjcf_model_matches_mujoco_and_crosschecks(path):
+    robot = load_robot(str(path))
+    assert robot.urdf_xml == "" and robot.mjcf_xml
+    mj_model = compile_robot(robot)
+    for q in random_configurations(robot, 2, seed=3):
+        M = _crba(robot, q)
+        got = pinocchio_mass_matrix(robot, mj_model, q)
+        np.testing.assert_allclose(got, M, rtol=0, atol=1e-13 * np.abs(M).max())
+    result = crosscheck_robot(robot, samples=1, seed=0)
+    assert result.passed, result
+    assert result.gim_rel_err is None and "DeNOC reads URDF only" in result.note
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "double_pendulum", "talos_arm"])
+def test_urdf_converted_to_mjcf_by_mujoco_gives_the_same_m(name, tmp_path):
+    """URDF -> MuJoCo -> mj_saveLastXML -> Pinocchio's MJCF parser: same M as the URDF.
+
+    MuJoCo writes 6 significant digits, so the two models agree to about 1e-6 relative.
+    """
+    urdf_robot = load_robot(name)
+    root = ET.fromstring(urdf_robot.urdf_xml)
+    for parent in root.iter():
+        for child in list(parent):
+            if child.tag in ("visual", "collision"):
+                parent.remove(child)
+    root.insert(0, ET.fromstring(f"<mujoco><compiler {EXACT_COMPILER.format(floor=0)}/></mujoco>"))
+    mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    path = tmp_path / f"{name}.xml"
+    mujoco.mj_saveLastXML(
+        str(path), mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    )
+    mjcf_robot = load_robot(str(path))
+    assert mjcf_robot.joint_names == urdf_robot.joint_names
+    for q in random_configurations(urdf_robot, 3, seed=1):
+        M_urdf, M_mjcf = _crba(urdf_robot, q), _crba(mjcf_robot, q)
+        np.testing.assert_allclose(M_mjcf, M_urdf, rtol=0, atol=2e-5 * np.abs(M_urdf).max())
+
+
+def test_floating_mjcf_adds_a_free_joint_and_matches_mujoco():
+    robot = load_robot(str(MJCF / "slider_arm.xml"), floating=True)
+    assert robot.nv == 12 and robot.joint_names[0] == "root_joint"
+    q = random_configurations(robot, 1, seed=5)[0]
+    M = _crba(robot, q)
+    got = pinocchio_mass_matrix(robot, compile_robot(robot), q)
+    np.testing.assert_allclose(got, M, rtol=0, atol=1e-13 * np.abs(M).max())
+
+
+def test_floating_mjcf_without_a_base_body_is_refused():
+    with pytest.raises(URDFError, match="its first body 'link1' already has a joint"):
+        load_robot(str(MJCF / "pendulum3.xml"), floating=True)
+
+
+def _erd_cases():
+    return [
+        pytest.param(name, floating, id=f"{name}-{'floating' if floating else 'fixed'}")
+        for name in example_robot_names()
+        for floating in (False, True)
+    ]
+
+
+@pytest.mark.parametrize(("name", "floating"), _erd_cases())
+def test_every_example_robot_passes_crosscheck_with_mujoco(name, floating):
+    """Pinocchio's M agrees with MuJoCo's, or MuJoCo's refusal names a link."""
+    try:
+        robot = load_robot(name, floating=floating)
+    except GimwatchError as exc:
+        pytest.skip(f"not loadable: {exc}")  # SDF-only, or no DoF with a fixed base
+    if robot.nv > 60:
+        pytest.skip("large")
+    result = crosscheck_robot(robot, samples=1, seed=0, peer="mujoco")
+    if result.mujoco_refusal:
+        assert result.mujoco_refusal.startswith("MuJoCo refuses link '"), result.mujoco_refusal
+        assert result.mujoco_gim_rel_err is None
+    else:
+        assert result.mujoco_gim_rel_err < 1e-13, result
+    assert result.passed, result
+
+
+def test_refusal_names_the_link():
+    robot = load_robot("bravo7_gripper")
+    with pytest.raises(MujocoRefusal, match="link 'bravo_finger1_link'"):
+        compile_robot(robot)
+
+
+def test_placeholder_limits_are_listed_and_sampled_in_range():
+    robot = load_robot(str(MJCF / "slider_arm.xml"))
+    assert "slide" in placeholder_limit_joints(robot)
+    qs = random_configurations(robot, 50, seed=0)
+    assert np.abs(qs[:, 0]).max() <= 1.0
+
+
+def test_cli_crosscheck_peer_mujoco_stderr_has_only_gimwatch_lines():
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "gimwatch",
+            "crosscheck",
+            "double_pendulum",
+            "ur5",
+            str(MJCF / "pendulum3.xml"),
+            "--peer",
+            "mujoco",
+            "--samples",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stderr
+    assert "M mujoco" in run.stdout
+    for line in run.stderr.splitlines():
+        assert line.startswith(("crosscheck:", "gimwatch:")), run.stderr
