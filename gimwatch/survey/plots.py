@@ -25,13 +25,12 @@ def _format(value: float) -> str:
 
 
 def _worst_tracked(result: SurveyResult, count: int) -> list:
-    """The ``count`` robots with the lowest Pearson r of log δ with log κ (NaN counts as lowest)."""
+    """The ``count`` robots with the lowest Pearson r of log δ with log κ.
 
-    def key(robot):
-        r = robot.pearson_log
-        return -math.inf if not math.isfinite(r) else r
-
-    return sorted(result.robots, key=key)[:count]
+    Robots whose r is undefined (δ or κ constant over the samples) are not candidates.
+    """
+    defined = [r for r in result.robots if math.isfinite(r.pearson_log)]
+    return sorted(defined, key=lambda robot: robot.pearson_log)[:count]
 
 
 def plot_kappa_vs_delta(result: SurveyResult, ax=None):
