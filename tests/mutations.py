@@ -58,6 +58,8 @@ class Mutant:
 DENOC = ("tests/test_denoc.py",)
 LONG = ("tests/test_longchain.py",)
 STRESS_QUICK = ("tests/test_stress.py", "-m", "not slow")
+#: the compiled kernels behind analyze_linear and matrix_free_kappa (gimwatch/denoc/linear.py)
+COMPILED_STATE = ("tests/test_longchain.py", "-k", "compiled_state or closed_forms or lanczos")
 
 MUTANTS = (
     # --- DeNOC recursions (numpy, gimwatch/denoc/recursions.py) ---
@@ -115,7 +117,7 @@ MUTANTS = (
         "gimwatch/denoc/compiled.py",
         "diag[i] = _p_dot(joint_type[i], e[i], column)",
         "diag[i] = _p_dot(joint_type[i], e[i], column) * (1.0 + 1e-9)",
-        LONG,
+        COMPILED_STATE,
         "O(n) diagonal off by 1e-9 relative",
     ),
     Mutant(
@@ -123,24 +125,24 @@ MUTANTS = (
         "gimwatch/denoc/compiled.py",
         "articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / pivot",
         "articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / (pivot * (1.0 + 1e-12))",
-        LONG + STRESS_QUICK[:1] + ("-m", "not slow"),
+        COMPILED_STATE,
         "articulated-body factor off by 1e-12 relative",
     ),
     Mutant(
         "compiled-gravity-1e-10",
         "gimwatch/denoc/compiled.py",
-        "a[3 + k] = -gravity[k]",
-        "a[3 + k] = -gravity[k] * (1.0 + 1e-10)",
-        LONG + STRESS_QUICK[:1] + ("-m", "not slow"),
-        "gravity 1e-10 too strong in the O(n) forward dynamics",
+        "force[i, k] = mass[i] * (a_com[k] + a[k] + t1[k] - gravity[k])",
+        "force[i, k] = mass[i] * (a_com[k] + a[k] + t1[k] - gravity[k] * (1.0 + 1e-10))",
+        DENOC,
+        "gravity 1e-10 too strong in the compiled inverse dynamics (DeNOC's τ, fixed base)",
     ),
     Mutant(
         "compiled-prismatic-coriolis",
         "gimwatch/denoc/compiled.py",
-        "bias_acc[i, 3 + k] += 2.0 * t1[k] * qd[i]",
-        "bias_acc[i, 3 + k] += 1.0 * t1[k] * qd[i]",
-        LONG,
-        "Coriolis term of prismatic joints halved (compiled)",
+        "a[k] += e[i, k] * qdd[i] + 2.0 * t1[k] * qd[i]",
+        "a[k] += e[i, k] * qdd[i] + 1.0 * t1[k] * qd[i]",
+        DENOC,
+        "Coriolis term of prismatic joints halved (compiled inverse dynamics)",
     ),
     # --- mpmath references ---
     Mutant(
