@@ -33,6 +33,7 @@ import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
 from gimwatch.model.robots import (
+    EXAMPLE_ROBOT_NOTES,
     PLACEHOLDER_LIMIT,
     Robot,
     placeholder_limit_joints,
@@ -234,6 +235,8 @@ def crosscheck_robot(
         notes.append(f"{refusal}; M not compared with MuJoCo")
     if singular_note:
         notes.append(singular_note)
+    if robot.spec in EXAMPLE_ROBOT_NOTES:
+        notes.append(EXAMPLE_ROBOT_NOTES[robot.spec])
     placeholders = placeholder_limit_joints(robot)
     if placeholders:
         shown = ", ".join(placeholders[:4]) + (", ..." if len(placeholders) > 4 else "")

@@ -156,3 +156,34 @@ def test_cli_crosscheck_peer_mujoco_stderr_has_only_gimwatch_lines():
     assert "M mujoco" in run.stdout
     for line in run.stderr.splitlines():
         assert line.startswith(("crosscheck:", "gimwatch:")), run.stderr
+
+
+def test_talos_legs_is_flagged_because_the_loader_reduces_it():
+    import example_robot_data
+
+    loader = example_robot_data.load("talos_legs")
+    robot = load_robot("talos_legs", floating=True)
+    assert loader.model.nv != robot.nv  # the loader locks joints; gimwatch does not
+    result = crosscheck_robot(robot, samples=1, seed=0)
+    assert "example_robot_data.load locks" in result.note
+
+
+@pytest.mark.parametrize("command", ["analyze", "crosscheck"])
+def test_third_party_libraries_stay_quiet_on_stderr(command, tmp_path):
+    """yourdfpy, urdfdom, Pinocchio's MJCF parser and MuJoCo print nothing of their own."""
+    from gimwatch.model.chains import chain_spec, generate_chain_urdf
+
+    urdf = tmp_path / "versioned.urdf"
+    urdf.write_text(
+        generate_chain_urdf(chain_spec(3)).replace("<robot ", '<robot version="1.1" ', 1)
+    )
+    for robot in (str(urdf), str(MJCF / "slider_arm.xml"), "double_pendulum"):
+        extra = ["--samples", "1", "--peer", "mujoco"] if command == "crosscheck" else []
+        run = subprocess.run(
+            [sys.executable, "-m", "gimwatch", command, robot, *extra],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert run.returncode == 0, run.stderr
+        assert run.stderr == "", run.stderr

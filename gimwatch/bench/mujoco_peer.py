@@ -86,14 +86,9 @@ def load_model(urdf_xml: str, gravity: np.ndarray):
 
 def mass_matrix(model, q: np.ndarray) -> np.ndarray:
     """MuJoCo's dense M(q): ``mj_fullM`` after ``mj_forward`` at ``q`` (zero velocity)."""
-    import mujoco
+    from gimwatch.model.mujoco_model import mass_matrix as mujoco_mass_matrix
 
-    data = mujoco.MjData(model)
-    data.qpos[:] = q
-    mujoco.mj_forward(model, data)
-    M = np.zeros((model.nv, model.nv))
-    mujoco.mj_fullM(model, data, M)
-    return M
+    return mujoco_mass_matrix(model, q)
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ from gimwatch.errors import InputError, RobotError, URDFError
 from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
 
 __all__ = [
+    "EXAMPLE_ROBOT_NOTES",
     "Robot",
     "captured_c_output",
     "chain_robot",
@@ -131,6 +132,18 @@ def _example_robots() -> dict[str, type]:
     from example_robot_data.robots_loader import ROBOTS
 
     return dict(ROBOTS)
+
+
+#: example-robot-data names whose model, as gimwatch loads it (the URDF file as written, no
+#: reduction), is not what the name or ``example_robot_data.load(name)`` suggests.
+EXAMPLE_ROBOT_NOTES = {
+    "ur3": "example-robot-data 5.0.0 ships a UR5 description under the name ur3",
+    "ur3_gripper": "example-robot-data 5.0.0 ships a UR5 description under the name ur3",
+    "ur3_limited": "example-robot-data 5.0.0 ships a UR5 description under the name ur3",
+    "talos_legs": (
+        "the full 32-DoF Talos URDF; example_robot_data.load locks the upper body (18 DoF)"
+    ),
+}
 
 
 def example_robot_names() -> tuple[str, ...]:
