@@ -17,14 +17,18 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
     from gimwatch.denoc import DenocModel
     from gimwatch.errors import (
+        BackendWarning,
         ConditioningError,
         GimwatchError,
+        GimwatchWarning,
         IllConditionedWarning,
         InputError,
+        OutputError,
         RobotError,
         SceneError,
         SimulationError,
         URDFError,
+        URDFWarning,
     )
     from gimwatch.metrics.conditioning import (
         ScaledDiagonalRatio,
@@ -66,15 +70,18 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
 
 #: Public name -> the module that defines it (imported on first access).
 _EXPORTS: dict[str, str] = {
+    "BackendWarning": "gimwatch.errors",
     "ChainSpec": "gimwatch.model.chains",
     "ConditioningError": "gimwatch.errors",
     "CrossCheckResult": "gimwatch.crosscheck",
     "DenocModel": "gimwatch.denoc",
     "GimAnalysis": "gimwatch.metrics.dense_analysis",
     "GimwatchError": "gimwatch.errors",
+    "GimwatchWarning": "gimwatch.errors",
     "IllConditionedWarning": "gimwatch.errors",
     "InputError": "gimwatch.errors",
     "MatrixFreeKappa": "gimwatch.metrics.matrix_free",
+    "OutputError": "gimwatch.errors",
     "PlanarChainReference": "gimwatch.stress.reference_planar",
     "Robot": "gimwatch.model.robots",
     "RobotError": "gimwatch.errors",
@@ -90,6 +97,7 @@ _EXPORTS: dict[str, str] = {
     "Trajectory": "gimwatch.simulation.simulate",
     "TreeReference": "gimwatch.stress.reference_tree",
     "URDFError": "gimwatch.errors",
+    "URDFWarning": "gimwatch.errors",
     "Watch": "gimwatch.metrics.watch",
     "analyze_configuration": "gimwatch.metrics.dense_analysis",
     "chain_spec": "gimwatch.model.chains",
@@ -127,15 +135,18 @@ _EXPORTS: dict[str, str] = {
 }
 
 __all__ = [
+    "BackendWarning",
     "ChainSpec",
     "ConditioningError",
     "CrossCheckResult",
     "DenocModel",
     "GimAnalysis",
     "GimwatchError",
+    "GimwatchWarning",
     "IllConditionedWarning",
     "InputError",
     "MatrixFreeKappa",
+    "OutputError",
     "PlanarChainReference",
     "Robot",
     "RobotError",
@@ -151,6 +162,7 @@ __all__ = [
     "Trajectory",
     "TreeReference",
     "URDFError",
+    "URDFWarning",
     "Watch",
     "__version__",
     "analyze_configuration",

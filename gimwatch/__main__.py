@@ -1,5 +1,7 @@
 """``python -m gimwatch``."""
 
-from gimwatch.cli import _entry_point
+import sys
 
-_entry_point()
+from gimwatch.cli import main
+
+sys.exit(main())

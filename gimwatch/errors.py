@@ -1,9 +1,10 @@
-"""The exception tree of gimwatch and its ill-conditioning warning.
+"""The exception tree of gimwatch and its warnings.
 
 Every error gimwatch raises on bad input derives from :class:`GimwatchError`; the
 subclasses keep the offending value as attributes and build a one-line message from
 them (what was wrong, what was received, and the fix when it is obvious). The command
-line prints that line and exits with status 2.
+line prints that line and exits with status 2. Every warning derives from
+:class:`GimwatchWarning`.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ __all__ = [
     "BackendWarning",
     "ConditioningError",
     "GimwatchError",
+    "GimwatchWarning",
     "IllConditionedWarning",
     "InputError",
     "OutputError",
@@ -97,16 +99,23 @@ class OutputError(GimwatchError):
         super().__init__(f"{path}: {problem}")
 
 
-class URDFWarning(UserWarning):
+class GimwatchWarning(UserWarning):
+    """Base class of every warning gimwatch issues.
+
+    Filter all of them at once with ``warnings.simplefilter("ignore", GimwatchWarning)``.
+    """
+
+
+class URDFWarning(GimwatchWarning):
     """A URDF value Pinocchio accepts but no physical body has; results from it are suspect.
 
     Example: principal moments of inertia that violate the triangle inequality.
     """
 
 
-class IllConditionedWarning(UserWarning):
+class IllConditionedWarning(GimwatchWarning):
     """The GIM's condition number (or its estimate) crossed a threshold."""
 
 
-class BackendWarning(UserWarning):
+class BackendWarning(GimwatchWarning):
     """gimwatch chose another dynamics backend than the one asked for, and why."""

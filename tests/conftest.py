@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import os
+
+# Tests draw figures without a display: the library never selects a backend, the tests do.
+os.environ.setdefault("MPLBACKEND", "Agg")
+
 import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits

@@ -121,12 +121,12 @@ MUTANTS = (
         "O(n) diagonal off by 1e-9 relative",
     ),
     Mutant(
-        "compiled-factor-1e-12",
+        "compiled-factor-1e-9",
         "gimwatch/denoc/compiled.py",
         "articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / pivot",
-        "articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / (pivot * (1.0 + 1e-12))",
+        "articulated[i, a, b] -= u_vectors[i, a] * u_vectors[i, b] / (pivot * (1.0 + 1e-9))",
         COMPILED_STATE,
-        "articulated-body factor off by 1e-12 relative",
+        "articulated-body factor of the compiled state (matrix-free κ) off by 1e-9 relative",
     ),
     Mutant(
         "compiled-gravity-1e-10",
@@ -302,8 +302,8 @@ MUTANTS = (
     Mutant(
         "denoc-potential-sign",
         "gimwatch/denoc/model.py",
-        "potential = -float(self.linear._mass @",
-        "potential = float(self.linear._mass @",
+        "potential = -float(self.tree.mass[1:] @",
+        "potential = float(self.tree.mass[1:] @",
         LONG,
         "DeNOC's gravity potential with the wrong sign",
     ),

@@ -44,7 +44,7 @@ def test_quick_run_writes_every_file(quick_run):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["environment"]["blas_threads"]["ratio"] > 0
     for name, reason in summary["skipped"].items():
-        assert name not in RUNNABLE and reason.startswith("not available yet")
+        assert name not in RUNNABLE and reason.startswith("not available")
 
 
 def test_quick_run_measures_what_it_claims(quick_run):

@@ -1,9 +1,8 @@
 """What accuracy costs in time: the sections of ``gimwatch bench`` and the run that ties them.
 
 Each section is a module of this package with ``run(context) -> SectionResult``; the
-:data:`SECTIONS` registry names them, with the modules they need. A section whose module or
-dependencies are missing (the simulation sections before ``gimwatch.simulation.simulate`` lands) is
-reported as skipped by ``all`` and refused when asked for by name.
+:data:`SECTIONS` registry names them. A section whose module cannot be imported (an optional
+dependency missing) is reported as skipped by ``all`` and refused when asked for by name.
 
 Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder as
 soon as it finishes, so an interrupted run keeps what it measured; ``report.md`` is then
@@ -90,12 +89,11 @@ class BenchContext:
 
 @dataclass(frozen=True)
 class Section:
-    """A registered section: its module and the modules it needs before it can run."""
+    """A registered section: its name, heading and the module that runs it."""
 
     name: str
     title: str
     module: str
-    needs: tuple[str, ...] = ()
 
 
 #: The sections in report order; ``all`` runs those whose status is None.
@@ -110,36 +108,29 @@ SECTIONS: dict[str, Section] = {
             "dynamics",
             "Dynamics backends per step",
             "gimwatch.bench.dynamics",
-            ("gimwatch.simulation.simulate",),
         ),
         Section(
             "integrators",
             "Work-precision of integrators (MuJoCo peer)",
             "gimwatch.bench.integrators",
-            ("gimwatch.simulation.simulate",),
         ),
         Section(
             "watch",
             "Cost of the watch per step",
             "gimwatch.bench.watch_section",
-            ("gimwatch.metrics.watch",),
         ),
-        Section(
-            "denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section", ("gimwatch.denoc",)
-        ),
+        Section("denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section"),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),
         Section("lean", "δ at the cost of its arithmetic", "gimwatch.bench.lean_cost"),
         Section(
             "tracker",
             "κ tracked at O(n) per sample",
             "gimwatch.bench.tracker_cost",
-            ("gimwatch.simulation.simulate",),
         ),
         Section(
             "tighten",
             "Tightening the tolerance on alarm",
             "gimwatch.bench.tighten",
-            ("gimwatch.simulation.simulate",),
         ),
     )
 }
@@ -155,9 +146,8 @@ def _importable(module: str) -> bool:
 def section_status(name: str) -> str | None:
     """None when section ``name`` can run, else why not (one line)."""
     section = SECTIONS[name]
-    missing = [m for m in (*section.needs, section.module) if not _importable(m)]
-    if missing:
-        return f"not available yet: needs {', '.join(missing)}"
+    if not _importable(section.module):
+        return f"not available: cannot import {section.module}"
     return None
 
 
@@ -185,7 +175,7 @@ def run_bench(
         The path of ``report.md``.
 
     Raises:
-        InputError: An unknown section, or one that is not available yet.
+        InputError: An unknown section, or one whose module cannot be imported.
     """
     from gimwatch.bench.report import environment, update_readme, write_report, write_section
 

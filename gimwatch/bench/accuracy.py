@@ -57,11 +57,9 @@ def _robot(spec) -> Robot:
 
 
 def _denoc_method(robot: Robot):
-    """DeNOC's q̈ when gimwatch.denoc has landed, else None (the hook for that backend)."""
-    try:
-        from gimwatch.denoc import DenocModel
-    except ImportError:
-        return None
+    """DeNOC's q̈ = FD(q, v, τ) for ``robot`` (fixed base, gravity along -z)."""
+    from gimwatch.denoc import DenocModel
+
     dm = DenocModel.from_urdf(robot.urdf_xml, floating=False, joint_order=robot.joint_names)
     gravity = (*GRAVITY_M_S2, 0.0)
     return lambda q, v, tau: np.asarray(dm.forward_dynamics(q, v, tau, gravity=gravity))
@@ -98,9 +96,7 @@ def _methods(robot: Robot) -> dict:
         "crba_cho_solve": cho_solve,
         "numpy_solve": numpy_solve,
     }
-    denoc = _denoc_method(robot)
-    if denoc is not None:
-        methods["denoc"] = denoc
+    methods["denoc"] = _denoc_method(robot)
     return methods, data
 
 

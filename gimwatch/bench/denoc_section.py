@@ -142,7 +142,7 @@ FD_TARGETS = {10: 3.0, 100: 1.2, 500: 1.2}
 
 
 def verdicts(rows: list[dict]) -> list[str]:
-    """The lean forward dynamics against issue 16's targets (one line per size and base)."""
+    """The lean forward dynamics against the lean-FD targets (one line per size and base)."""
     lines = []
     for row in rows:
         if row["quantity"] in ("forward_dynamics_lean", "forward_dynamics_floating_lean"):

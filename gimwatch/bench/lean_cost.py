@@ -169,7 +169,7 @@ def verdicts(rows: list[dict]) -> list[str]:
 
 
 def run(context: BenchContext) -> SectionResult:
-    """Measure and summarise against issue 16's δ targets."""
+    """Measure and summarise against the δ cost targets."""
     # BLAS on one thread, set here: the CLI's limit misses an OpenBLAS loaded after it
     with threadpool_limits(limits=1, user_api="blas"):
         table = measure(context)

@@ -1,12 +1,17 @@
 """Figures of the benchmark, drawn from the rows of its tables (measure, then plot).
 
-Each ``plot_*`` function takes table rows and a PNG path, draws with matplotlib's Agg
-backend, writes the file atomically and returns the path.
+Each ``draw_*`` function takes table rows, draws on ``ax`` (a new figure's axes when None)
+and returns the Axes, with units on both axes; it never selects a backend or shows. Each
+``plot_*`` function draws a whole figure from the rows and writes it to a PNG atomically.
+:func:`replot` redraws every figure of a benchmark folder from its committed JSON tables,
+without measuring anything (``gimwatch bench --replot``).
 """
 
 from __future__ import annotations
 
 import io
+import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +19,14 @@ import numpy as np
 from gimwatch.output.atomic import write_bytes_atomic
 
 __all__ = [
+    "FIGURES",
+    "draw_accuracy_vs_kappa",
+    "draw_cost_vs_n",
+    "draw_denoc_cost",
+    "draw_dynamics_cost",
+    "draw_pareto",
+    "draw_watch_cost",
+    "draw_work_precision",
     "plot_accuracy_vs_kappa",
     "plot_cost_vs_n",
     "plot_denoc_cost",
@@ -21,72 +34,104 @@ __all__ = [
     "plot_pareto",
     "plot_watch_cost",
     "plot_work_precision",
+    "replot",
 ]
 
 EPS = float(np.finfo(float).eps)
+#: Below this median relative error an estimator of κ counts as exact (round-off only).
+EXACT_ERROR = 1e-6
 
 
-def _figure():
-    import matplotlib
+def _axes(ax, figsize=(7.0, 4.5)):
+    if ax is None:
+        from matplotlib.figure import Figure  # no pyplot: leaves the user's backend alone
 
-    matplotlib.use("Agg", force=False)
-    from matplotlib.figure import Figure
-
-    return Figure(figsize=(7.0, 4.5), layout="constrained")
+        ax = Figure(figsize=figsize, layout="constrained").add_subplot()
+    return ax
 
 
 def _save(figure, path: Path) -> Path:
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png", dpi=110)
-    return write_bytes_atomic(path, buffer.getvalue())
+    return write_bytes_atomic(Path(path), buffer.getvalue())
 
 
-def plot_cost_vs_n(rows: list[dict], path: Path) -> Path:
+def _one_panel(draw: Callable, rows: list[dict], path: Path, **options) -> Path:
+    ax = draw(rows, **options)
+    return _save(ax.figure, path)
+
+
+def draw_cost_vs_n(rows: list[dict], *, ax=None):
     """Median cost per call against n, one line per method, log-log."""
-    figure = _figure()
-    ax = figure.add_subplot()
+    ax = _axes(ax)
     for method in dict.fromkeys(r["method"] for r in rows):
         points = sorted((r["n"], r["median_s"]) for r in rows if r["method"] == method)
         ns, seconds = zip(*points, strict=True)
         ax.loglog(ns, np.array(seconds) * 1e6, "o-", label=method, markersize=4)
-    ax.set_xlabel("n (links of the paper chain)")
-    ax.set_ylabel("median time per call (µs)")
+    ax.set_xlabel("n, links of the paper's rod chain [-]")
+    ax.set_ylabel("median time per call [µs]")
     ax.set_title("What κ, δ and their estimates cost (one BLAS thread)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    return _save(figure, path)
+    return ax
 
 
-def plot_pareto(rows: list[dict], path: Path) -> Path:
-    """Estimator error (median relative error vs κ) against cost per evaluation."""
-    figure = _figure()
-    ax = figure.add_subplot()
-    estimators = list(dict.fromkeys(r["estimator"] for r in rows))
-    markers = "osD^v<>px*h"
+def plot_cost_vs_n(rows: list[dict], path: Path) -> Path:
+    """``conditioning_cost.png``: :func:`draw_cost_vs_n`."""
+    return _one_panel(draw_cost_vs_n, rows, path)
+
+
+def draw_pareto(rows: list[dict], *, exact: bool = False, ax=None):
+    """Median relative error against κ vs cost per evaluation, one marker per estimator.
+
+    ``exact`` selects the estimators whose median error is below :data:`EXACT_ERROR`
+    (round-off only), else the approximate ones: drawn apart, each group fills its axes
+    instead of crowding one corner of a 1e-16…1 range.
+    """
+    ax = _axes(ax)
     robots = list(dict.fromkeys(r["robot"] for r in rows))
     colors = {robot: f"C{i % 10}" for i, robot in enumerate(robots)}
-    for i, estimator in enumerate(estimators):
-        for row in (r for r in rows if r["estimator"] == estimator):
+    groups: dict[str, list[dict]] = {}
+    for row in rows:
+        groups.setdefault(row["estimator"], []).append(row)
+    chosen = {
+        name: group
+        for name, group in groups.items()
+        if (np.median([r["median_rel_error"] for r in group]) < EXACT_ERROR) == exact
+    }
+    markers = "osD^v<>px*h"
+    for i, (estimator, group) in enumerate(chosen.items()):
+        for row in group:
             error = max(row["median_rel_error"], EPS)
             ax.loglog(
                 row["cost_s"] * 1e6, error, markers[i % len(markers)], color=colors[row["robot"]]
             )
-    for i, estimator in enumerate(estimators):
         ax.plot([], [], markers[i % len(markers)], color="k", label=estimator)
     for robot, color in colors.items():
         ax.plot([], [], "s", color=color, label=robot)
-    ax.set_xlabel("cost per evaluation (µs, median)")
-    ax.set_ylabel("median relative error against κ")
-    ax.set_title("Estimators of κ: error vs cost (lower left is better)")
+    ax.set_xlabel("cost per evaluation, median [µs]")
+    ax.set_ylabel("median relative error against κ [-]")
+    kind = "exact up to round-off" if exact else "cheap approximations"
+    ax.set_title(f"Estimators of κ, {kind} (lower left is better)", fontsize="medium")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
+    return ax
+
+
+def plot_pareto(rows: list[dict], path: Path) -> Path:
+    """``estimators_pareto.png``: approximate and exact estimators in two panels."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(12.0, 4.8), layout="constrained")
+    left, right = figure.subplots(1, 2)
+    draw_pareto(rows, exact=False, ax=left)
+    draw_pareto(rows, exact=True, ax=right)
     return _save(figure, path)
 
 
-def plot_accuracy_vs_kappa(rows: list[dict], path: Path) -> Path:
+def draw_accuracy_vs_kappa(rows: list[dict], *, ax=None):
     """Relative error of q̈ against κ for each method, with the κ·eps line."""
-    figure = _figure()
-    ax = figure.add_subplot()
+    ax = _axes(ax)
     kappas = np.array([r["kappa"] for r in rows])
     for i, method in enumerate(dict.fromkeys(r["method"] for r in rows)):
         points = [
@@ -96,34 +141,48 @@ def plot_accuracy_vs_kappa(rows: list[dict], path: Path) -> Path:
         ax.loglog(x, y, "osD^v"[i % 5], label=method, markersize=4, alpha=0.8)
     line = np.geomspace(kappas.min(), kappas.max(), 50)
     ax.loglog(line, line * EPS, "k--", label="κ·eps")
-    ax.set_xlabel("κ₂(M)")
-    ax.set_ylabel("relative error of q̈ (vs mpmath, 50 digits)")
+    ax.set_xlabel("κ₂(M) [-]")
+    ax.set_ylabel("relative error of q̈ vs mpmath (50 digits) [-]")
     ax.set_title("Forward-dynamics accuracy vs conditioning")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    return _save(figure, path)
+    return ax
 
 
-def plot_watch_cost(rows: list[dict], path: Path) -> Path:
-    """One watch sample's cost as a fraction of a bare simulation step, per n and watch."""
-    figure = _figure()
-    ax = figure.add_subplot()
+def plot_accuracy_vs_kappa(rows: list[dict], path: Path) -> Path:
+    """``accuracy_vs_kappa.png``: :func:`draw_accuracy_vs_kappa`."""
+    return _one_panel(draw_accuracy_vs_kappa, rows, path)
+
+
+def draw_watch_cost(rows: list[dict], *, ax=None):
+    """One watch sample's cost as a % of a bare simulation step: grouped bars, linear axis.
+
+    Bars start at zero on a linear axis (a bar's length is its value); each bar is labelled
+    with its value so that the small ones can still be read.
+    """
+    ax = _axes(ax)
     watches = [w for w in dict.fromkeys(r["watch"] for r in rows) if w != "none"]
     ns = sorted({r["n"] for r in rows})
     width = 0.8 / max(len(watches), 1)
     for i, watch in enumerate(watches):
         values = [
-            next(r["sample_vs_step"] for r in rows if r["n"] == n and r["watch"] == watch)
+            100 * next(r["sample_vs_step"] for r in rows if r["n"] == n and r["watch"] == watch)
             for n in ns
         ]
-        ax.bar(np.arange(len(ns)) + i * width, np.array(values) * 100, width, label=watch)
+        bars = ax.bar(np.arange(len(ns)) + i * width, values, width, label=watch)
+        ax.bar_label(bars, fmt="%.3g", fontsize=7, padding=1)
     ax.set_xticks(np.arange(len(ns)) + width * (len(watches) - 1) / 2, [f"n = {n}" for n in ns])
-    ax.set_yscale("log")
-    ax.set_ylabel("one watch sample / one bare RK4+ABA step (%)")
+    ax.set_xlabel("chain length [links]")
+    ax.set_ylabel("one watch sample / one bare RK4+ABA step [%]")
     ax.set_title("What the watch costs (a sample every step; amortize by the sampling rate)")
-    ax.grid(True, axis="y", which="both", alpha=0.3)
+    ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=8)
-    return _save(figure, path)
+    return ax
+
+
+def plot_watch_cost(rows: list[dict], path: Path) -> Path:
+    """``watch_cost.png``: :func:`draw_watch_cost`."""
+    return _one_panel(draw_watch_cost, rows, path)
 
 
 def _loglog_lines(rows: list[dict], series: str, value: str, ax) -> None:
@@ -139,63 +198,109 @@ def _loglog_lines(rows: list[dict], series: str, value: str, ax) -> None:
     ax.legend(fontsize=8)
 
 
-def plot_dynamics_cost(rows: list[dict], path: Path) -> Path:
+def draw_dynamics_cost(rows: list[dict], *, ax=None):
     """Forward-dynamics cost per call against n, one line per backend, log-log."""
-    figure = _figure()
-    ax = figure.add_subplot()
+    ax = _axes(ax)
     _loglog_lines(rows, "backend", "call_us", ax)
-    ax.set_xlabel("n (links of the paper chain)")
-    ax.set_ylabel("forward dynamics, median µs per call")
+    ax.set_xlabel("n, links of the paper's rod chain [-]")
+    ax.set_ylabel("forward dynamics, median per call [µs]")
     ax.set_title("Dynamics backends: cost of one q̈ evaluation")
-    return _save(figure, path)
+    return ax
+
+
+def plot_dynamics_cost(rows: list[dict], path: Path) -> Path:
+    """``dynamics_cost.png``: :func:`draw_dynamics_cost`."""
+    return _one_panel(draw_dynamics_cost, rows, path)
+
+
+def draw_denoc_cost(rows: list[dict], *, ax=None):
+    """DeNOC / Pinocchio time ratio per quantity against n (the rod chains ``chain:n``)."""
+    ax = _axes(ax)
+    _loglog_lines(rows, "quantity", "ratio", ax)
+    ax.axhline(1.0, color="k", lw=0.8, ls=":")
+    ax.set_xlabel("n, links of the planar rod chain chain:n [-]")
+    ax.set_ylabel("DeNOC time / Pinocchio time [-]")
+    ax.set_title("DeNOC (numba-compiled) against Pinocchio (C++)")
+    return ax
 
 
 def plot_denoc_cost(rows: list[dict], path: Path) -> Path:
-    """DeNOC / Pinocchio time ratio per quantity against n."""
-    figure = _figure()
-    ax = figure.add_subplot()
-    _loglog_lines(rows, "quantity", "ratio", ax)
-    ax.set_xlabel("n (links, spatial chain)")
-    ax.set_ylabel("DeNOC time / Pinocchio time")
-    ax.set_title("DeNOC against Pinocchio (C++)")
-    return _save(figure, path)
+    """``denoc_cost.png``: :func:`draw_denoc_cost`."""
+    return _one_panel(draw_denoc_cost, rows, path)
+
+
+def draw_work_precision(rows: list[dict], n: int, *, ax=None):
+    """Final-state error against wall time for the ``n``-link chain, one line per method."""
+    ax = _axes(ax)
+    curves = dict.fromkeys((r["simulator"], r["method"]) for r in rows if r["n"] == n)
+    for k, (simulator, method) in enumerate(curves):
+        curve = [
+            r
+            for r in rows
+            if (r["n"], r["simulator"], r["method"]) == (n, simulator, method)
+            and np.isfinite(r["error_rad"])
+        ]
+        if not curve:
+            continue
+        # in order of the error control (loosest tolerance or largest step first),
+        # not of the measured (noisy) wall time
+        curve.sort(key=lambda r: -(r["rtol"] if np.isfinite(r["rtol"]) else r["dt_s"]))
+        x, y = zip(*((r["wall_s"], max(r["error_rad"], 1e-16)) for r in curve), strict=True)
+        dashed = "--" if simulator == "mujoco" else "-"
+        ax.loglog(
+            x, y, "o" + dashed, color=f"C{k % 10}", label=f"{simulator} {method}", markersize=3
+        )
+    ax.axhline(1e-10, color="k", lw=0.8, ls=":")
+    ax.set_xlabel("wall time [s]")
+    ax.set_ylabel("final-state error, max |q − q_ref| [rad]")
+    ax.set_title(f"{n}-link swinging chain")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    return ax
 
 
 def plot_work_precision(rows: list[dict], path: Path) -> Path:
-    """Final-state error against wall time, one panel per chain, one line per method."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
+    """``work_precision.png``: one :func:`draw_work_precision` panel per chain."""
     from matplotlib.figure import Figure
 
     chains = list(dict.fromkeys(r["n"] for r in rows))
     figure = Figure(figsize=(5.0 * len(chains), 4.5), layout="constrained")
     axes = figure.subplots(1, len(chains), squeeze=False)[0]
-    styles = {}
     for ax, n in zip(axes, chains, strict=True):
-        curves = dict.fromkeys((r["simulator"], r["method"]) for r in rows if r["n"] == n)
-        for simulator, method in curves:
-            curve = [
-                r
-                for r in rows
-                if (r["n"], r["simulator"], r["method"]) == (n, simulator, method)
-                and np.isfinite(r["error_rad"])
-            ]
-            if not curve:
-                continue
-            # in order of the error control (loosest tolerance or largest step first),
-            # not of the measured (noisy) wall time
-            curve.sort(key=lambda r: -(r["rtol"] if np.isfinite(r["rtol"]) else r["dt_s"]))
-            points = [(r["wall_s"], max(r["error_rad"], 1e-16)) for r in curve]
-            label = f"{simulator} {method}"
-            color = styles.setdefault(label, f"C{len(styles) % 10}")
-            x, y = zip(*points, strict=True)
-            dashed = "--" if simulator == "mujoco" else "-"
-            ax.loglog(x, y, "o" + dashed, color=color, label=label, markersize=3)
-        ax.axhline(1e-10, color="k", lw=0.8, ls=":")
-        ax.set_xlabel("wall time (s)")
-        ax.set_ylabel("final-state error, max |q - q_ref| (rad)")
-        ax.set_title(f"{n}-link swinging chain")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        draw_work_precision(rows, n, ax=ax)
     return _save(figure, path)
+
+
+#: Every figure of a benchmark folder: PNG name → (JSON table, its writer, which rows).
+FIGURES: dict[str, tuple[str, Callable[[list[dict], Path], Path], Callable[[dict], bool]]] = {
+    "conditioning_cost.png": ("conditioning.json", plot_cost_vs_n, lambda r: True),
+    "estimators_pareto.png": ("estimators.json", plot_pareto, lambda r: r["sweep"] == "swing"),
+    "accuracy_vs_kappa.png": ("accuracy.json", plot_accuracy_vs_kappa, lambda r: True),
+    "dynamics_cost.png": ("dynamics.json", plot_dynamics_cost, lambda r: True),
+    "work_precision.png": ("integrators.json", plot_work_precision, lambda r: True),
+    "watch_cost.png": ("watch.json", plot_watch_cost, lambda r: True),
+    "denoc_cost.png": ("denoc.json", plot_denoc_cost, lambda r: True),
+}
+
+
+def _finite(value):
+    return float("nan") if value is None else value
+
+
+def replot(folder: str | Path) -> list[Path]:
+    """Redraw every figure whose table is in ``folder`` from that table; measure nothing.
+
+    Returns:
+        The PNG files written (tables absent from the folder are skipped).
+    """
+    folder = Path(folder)
+    written = []
+    for png, (table, writer, keep) in FIGURES.items():
+        source = folder / table
+        if not source.is_file():
+            continue
+        rows = json.loads(source.read_text(encoding="utf-8"))["rows"]
+        rows = [{k: _finite(v) for k, v in row.items()} for row in rows if keep(row)]
+        if rows:
+            written.append(writer(rows, folder / png))
+    return written

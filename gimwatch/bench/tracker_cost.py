@@ -290,7 +290,7 @@ def verdicts(tracker: Table, chain_1000: Table) -> list[str]:
 
 
 def run(context: BenchContext) -> SectionResult:
-    """Measure the three tables and summarise against issue 16's targets."""
+    """Measure the three tables and summarise against the tracker's cost targets."""
     tracker = Table("tracker_samples", TRACKER_COLUMNS)
     # BLAS on one thread, set here: the CLI's limit misses an OpenBLAS loaded after it
     with threadpool_limits(limits=1, user_api="blas"):

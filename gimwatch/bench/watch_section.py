@@ -47,7 +47,7 @@ WATCHES: dict[str, tuple[str, ...]] = {
 }
 STEPS_PER_SAMPLE = 10
 DT_S = 1e-3
-#: Target of issue 4: watching δ costs under this fraction of a bare ABA step (20 links).
+#: Target: watching δ costs under this fraction of a bare ABA step (20 links).
 DELTA_TARGET = 0.15
 COLUMNS = (
     "n",

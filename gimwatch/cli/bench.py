@@ -24,6 +24,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", default="benchmarks", help="output folder")
     parser.add_argument("--quick", action="store_true", help="tiny sizes: a smoke run")
     parser.add_argument(
+        "--replot",
+        action="store_true",
+        help="measure nothing: redraw the figures of --output from its JSON tables",
+    )
+    parser.add_argument(
         "--seed", type=non_negative_int, default=0, help="seed of every random draw"
     )
     parser.add_argument(
@@ -42,7 +47,13 @@ def _progress(line: str) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the sections and print the report."""
+    """Run the sections and print the report (or, with --replot, only redraw the figures)."""
+    if args.replot:
+        from gimwatch.bench.plots import replot
+
+        for path in replot(args.output):
+            print(path)
+        return 0
     which = ["all"] if "all" in args.which else args.which
     report = run_bench(
         which,

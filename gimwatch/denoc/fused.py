@@ -174,15 +174,6 @@ def _kinematics(q, index, geometry, floating, rot, vec, block):
 
 
 @njit(cache=True, inline="always")
-def _column(kind, e, x, out6):
-    """out6 = p_i x: [e x; 0] (revolute, continuous) or [0; e x] (prismatic)."""
-    k = 3 if kind == 3 else 0
-    for a in range(6):
-        out6[a] = 0.0
-    out6[k], out6[k + 1], out6[k + 2] = e[0] * x, e[1] * x, e[2] * x
-
-
-@njit(cache=True, inline="always")
 def _p_dot(kind, e, vector6):
     """p_iᵀ x for a 6-vector x."""
     k = 3 if kind == 3 else 0

@@ -170,7 +170,7 @@ class DenocModel:
         velocity = self.to_internal("v", v)
         kinetic = 0.5 * float(velocity @ state.matvec(velocity))
         centres = state.origin + state.com_offset
-        potential = -float(self.linear._mass @ (centres @ _vector("gravity", gravity, 3)))
+        potential = -float(self.tree.mass[1:] @ (centres @ _vector("gravity", gravity, 3)))
         return kinetic, potential
 
     def permutation_to(self, order: Sequence[str]) -> np.ndarray:
@@ -195,13 +195,6 @@ class DenocModel:
         displacement = np.where(kind == 3, first, 0.0)
         root = q[self._root_q : self._root_q + 7] if tree.floating else None
         return recursions.kinematics(tree, cos, sin, displacement, root)
-
-    def _split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Internal vector → (per-body values (N,), root's 6 values)."""
-        start = 6 if self.tree.floating else 0
-        per_body = np.zeros(self.tree.size)
-        per_body[1:] = x[start:]
-        return per_body, x[:start]
 
     # -- the GIM ----------------------------------------------------------------------
     def gim(self, q: npt.ArrayLike) -> np.ndarray:

@@ -103,13 +103,6 @@ class ChainSpec:
         """Robot name used in the URDF, e.g. ``chain_4``."""
         return f"chain_{self.n}"
 
-    @property
-    def is_uniform(self) -> bool:
-        """True when every link has the same mass, length and radius."""
-        return all(
-            len(set(values)) == 1 for values in (self.masses_kg, self.lengths_m, self.radii_m)
-        )
-
 
 def _per_link(name: str, value: float | Sequence[float], n: int) -> tuple[float, ...]:
     values = np.atleast_1d(np.asarray(value, dtype=float))

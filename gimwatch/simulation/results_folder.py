@@ -96,22 +96,36 @@ def _csv(header: list[str], columns: list[np.ndarray]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _plots(trajectory: Trajectory, folder: Path) -> None:
-    import matplotlib
+def _coordinate_names_and_units(trajectory: Trajectory) -> tuple[list[str], list[str] | None]:
+    """Each q column's joint name and unit (rad, m, -), from the scene's robot model."""
+    from gimwatch.output.figures import joint_coordinate_units
+    from gimwatch.simulation.scene_robot import load_scene_robot
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    try:
+        names, units = joint_coordinate_units(load_scene_robot(trajectory.scene).model)
+    except Exception:  # a plot label is not worth failing the results folder for
+        names, units = [], []
+    if len(names) != trajectory.q.shape[1]:
+        return [f"q{i + 1}" for i in range(trajectory.q.shape[1])], None
+    return names, units
+
+
+def _plots(trajectory: Trajectory, folder: Path) -> None:
+    from matplotlib.figure import Figure  # no pyplot: leaves the user's backend alone
 
     from gimwatch.output import figures as plots
 
     def save(name, draw):
-        fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
-        draw(ax)
+        fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+        draw(fig.subplots())
         fig.savefig(folder / name, dpi=110)
-        plt.close(fig)
 
     t, watch = trajectory.t, trajectory.watch
-    save("joints.png", lambda ax: plots.plot_joint_angles(t, trajectory.q, ax=ax))
+    names, units = _coordinate_names_and_units(trajectory)
+    save(
+        "joints.png",
+        lambda ax: plots.plot_joint_angles(t, trajectory.q, names=names, units=units, ax=ax),
+    )
     if trajectory.energy is not None and trajectory.energy.size:
         save("energy.png", lambda ax: plots.plot_energy(t, trajectory.energy, ax=ax))
     wt = watch.get("watch_t")
@@ -122,6 +136,15 @@ def _plots(trajectory: Trajectory, folder: Path) -> None:
             "kappa_delta.png",
             lambda ax: plots.plot_kappa_and_delta(
                 wt, watch["watch_kappa"], watch["watch_diagonal_ratio"], ax=ax
+            ),
+        )
+    if "watch_diagonal_ratio" in watch:
+        spec = trajectory.scene.watch
+        threshold = spec.alarm_threshold if spec.alarm_metric == "diagonal_ratio" else None
+        save(
+            "delta.png",
+            lambda ax: plots.plot_delta(
+                wt, watch["watch_diagonal_ratio"], threshold=threshold, ax=ax
             ),
         )
     if "watch_kappa" in watch and "watch_scaled_diagonal_ratio" in watch:

@@ -45,10 +45,6 @@ def _matvec(R: list, x: list) -> list:
     return [R[i][0] * x[0] + R[i][1] * x[1] + R[i][2] * x[2] for i in range(3)]
 
 
-def _tmatvec(R: list, x: list) -> list:
-    return [R[0][i] * x[0] + R[1][i] * x[1] + R[2][i] * x[2] for i in range(3)]
-
-
 def _matmul(A: list, B: list) -> list:
     n, m, k = len(A), len(B[0]), len(B)
     return [[mpmath.fsum(A[i][r] * B[r][j] for r in range(k)) for j in range(m)] for i in range(n)]

@@ -16,6 +16,7 @@ import numpy as np
 
 from gimwatch.output.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from gimwatch.output.environment import cpu_model, versions
+from gimwatch.survey.plots import plot_kappa_vs_delta, plot_kappa_vs_delta_grid
 from gimwatch.survey.run import DOF_METRICS, METRICS, RobotSurvey, SurveyResult
 from gimwatch.survey.trajectory import TrajectoryStatistics
 
@@ -346,57 +347,6 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
     return "\n".join(lines)
 
 
-def _colors(count: int):
-    import matplotlib as mpl
-
-    cmap = mpl.colormaps["tab20"] if count <= 20 else mpl.colormaps["turbo"]
-    return [cmap(k / max(count - 1, 1)) if count > 20 else cmap(k) for k in range(count)]
-
-
-def plot_kappa_vs_delta(result: SurveyResult, ax=None):
-    """Log-log scatter of κ against δ, every robot in its own colour, with the bound κ >= δ."""
-    import matplotlib.pyplot as plt
-
-    ax = plt.gca() if ax is None else ax
-    for r, color in zip(result.robots, _colors(len(result.robots)), strict=True):
-        ax.scatter(r.metrics["delta"], r.metrics["kappa"], s=6, color=color, label=r.name)
-    limits = [
-        min([r.quantiles["delta"]["min"] for r in result.robots], default=1.0),
-        max([r.quantiles["kappa"]["max"] for r in result.robots], default=10.0),
-    ]
-    ax.plot(limits, limits, "k--", linewidth=0.8, label="κ = δ (lower bound)")
-    ax.set(xscale="log", yscale="log", xlabel="diagonal ratio δ", ylabel="condition number κ")
-    ax.legend(fontsize=6, ncol=2, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    return ax
-
-
-def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
-    """One log-log panel per robot: κ against δ, with the calibrated line κ = αδ."""
-    import matplotlib.pyplot as plt
-
-    count = max(len(result.robots), 1)
-    columns = min(6, count)
-    rows = math.ceil(count / columns)
-    fig = plt.figure(figsize=(2.3 * columns, 2.0 * rows)) if fig is None else fig
-    axes = fig.subplots(rows, columns, squeeze=False)
-    colors = _colors(len(result.robots))
-    for ax, r, color in zip(axes.flat, result.robots, colors, strict=False):
-        delta = r.metrics["delta"]
-        ax.scatter(delta, r.metrics["kappa"], s=4, color=color)
-        line = np.array([delta.min(), delta.max()])
-        if math.isfinite(r.alpha):
-            ax.plot(line, r.alpha * line, "k--", linewidth=0.7)
-        ax.set(xscale="log", yscale="log")
-        ax.set_title(f"{r.name} (r={_f(r.pearson_log)})", fontsize=7)
-        ax.tick_params(labelsize=5)
-    for ax in axes.flat[len(result.robots) :]:
-        ax.set_axis_off()
-    fig.supxlabel("δ")
-    fig.supylabel("κ  (dashed: αδ, α at the neutral configuration)")
-    fig.tight_layout()
-    return fig
-
-
 def _png(fig) -> bytes:
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110, bbox_inches="tight")
@@ -414,12 +364,12 @@ def write_survey(
     from matplotlib.figure import Figure  # no pyplot: leaves the user's backend alone
 
     output = Path(output)
-    fig = Figure(figsize=(8, 6))
+    fig = Figure(figsize=(8, 6), layout="constrained")
     plot_kappa_vs_delta(result, ax=fig.subplots())
     write_bytes_atomic(output / SCATTER_PNG, _png(fig))
     count = max(len(result.robots), 1)
     columns = min(6, count)
-    grid = Figure(figsize=(2.3 * columns, 2.0 * math.ceil(count / columns)))
+    grid = Figure(figsize=(2.6 * columns, 2.3 * math.ceil(count / columns) + 0.6))
     write_bytes_atomic(output / GRID_PNG, _png(plot_kappa_vs_delta_grid(result, fig=grid)))
     write_json_atomic(output / "survey.json", survey_record(result, wall_time_s=wall_time_s))
     write_text_atomic(output / "survey.csv", _csv_text(result))

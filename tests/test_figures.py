@@ -1,0 +1,196 @@
+"""Every figure-producing function labels both axes with a unit, returns what it drew on,
+and draws a capped number of lines for long chains.
+
+A unit is written in brackets, ``[s]``, ``[kg·m²]``, or ``[-]`` for a dimensionless ratio.
+The bench figures are drawn from the committed tables in ``benchmarks/`` (measure, then plot).
+"""
+
+from __future__ import annotations
+
+import inspect
+import json
+import re
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from gimwatch.bench import plots as bench_plots
+from gimwatch.output import figures
+from gimwatch.survey import plots as survey_plots
+
+ROOT = Path(__file__).resolve().parents[1]
+UNIT = re.compile(r"\[[^\]]+\]")
+
+
+def _axes():
+    return Figure(figsize=(6, 4)).add_subplot()
+
+
+def _assert_units(ax, where: str) -> None:
+    for axis, label in (("x", ax.get_xlabel()), ("y", ax.get_ylabel())):
+        assert UNIT.search(label), f"{where}: {axis} label {label!r} has no unit in [...]"
+
+
+T = np.linspace(0.0, 1.0, 21)
+RNG = np.random.default_rng(0)
+POSITIVE = np.exp(RNG.normal(size=(21, 4)))
+
+FIGURE_CALLS = {
+    "plot_eigenvalues": lambda ax: figures.plot_eigenvalues(T, np.sort(POSITIVE, axis=1), ax=ax),
+    "plot_diagonal": lambda ax: figures.plot_diagonal(T, POSITIVE, ax=ax),
+    "plot_kappa_and_delta": lambda ax: figures.plot_kappa_and_delta(
+        T, 50 * POSITIVE[:, 0], POSITIVE[:, 1], ax=ax
+    ),
+    "plot_delta": lambda ax: figures.plot_delta(T, POSITIVE[:, 0], threshold=2.0, ax=ax),
+    "plot_pivot_ratios": lambda ax: figures.plot_pivot_ratios(
+        T, POSITIVE[:, 0], POSITIVE[:, 1], POSITIVE[:, 2], ax=ax
+    ),
+    "plot_kappa_and_scaled": lambda ax: figures.plot_kappa_and_scaled(
+        T, POSITIVE[:, 0], POSITIVE[:, 1], ax=ax
+    ),
+    "plot_energy": lambda ax: figures.plot_energy(T, POSITIVE[:, 0], ax=ax),
+    "plot_joint_angles": lambda ax: figures.plot_joint_angles(
+        T, POSITIVE, names=["a", "b", "c", "d"], units=["rad", "rad", "m", "-"], ax=ax
+    ),
+}
+
+
+def test_every_plot_function_of_figures_is_checked():
+    public = {n for n in figures.__all__ if n.startswith("plot_")}
+    assert public == set(FIGURE_CALLS)
+
+
+@pytest.mark.parametrize("name", sorted(FIGURE_CALLS))
+def test_run_figures_label_units_and_return_the_axes(name):
+    ax = _axes()
+    assert FIGURE_CALLS[name](ax) is ax
+    _assert_units(ax, name)
+
+
+def test_animation_axes_have_units():
+    xy = np.zeros((3, 3, 2))
+    xy[:, 1, 0], xy[:, 2, 0] = 1.0, 2.0
+    animation = figures.animate_chain(T[:3], xy, np.array([1.0, 2.0, 3.0]))
+    ax = animation._fig.axes[0]  # matplotlib's animation keeps its figure there
+    _assert_units(ax, "animate_chain")
+
+
+def test_joint_plot_names_joints_and_separates_units():
+    ax = figures.plot_joint_angles(
+        T, POSITIVE[:, :2], names=["shoulder", "slider"], units=["rad", "m"], ax=_axes()
+    )
+    labels = [line.get_label() for line in ax.get_lines()]
+    assert labels == ["shoulder", "slider"]
+    assert "[rad]" in ax.get_ylabel() and "[m]" in ax.get_ylabel()
+    assert [line.get_linestyle() for line in ax.get_lines()] == ["-", "--"]
+
+
+def test_a_thousand_joints_draw_an_envelope_not_a_thousand_lines():
+    q = RNG.normal(size=(21, 1000))
+    ax = figures.plot_joint_angles(T, q, ax=_axes())
+    assert len(ax.get_lines()) <= figures.MAX_LINES
+    ax = figures.plot_eigenvalues(T, np.sort(np.exp(q), axis=1), ax=_axes())
+    assert len(ax.get_lines()) <= figures.MAX_LINES
+
+
+def test_kappa_and_delta_start_together_so_trends_compare():
+    ax = figures.plot_kappa_and_delta(T, 80 * POSITIVE[:, 0], POSITIVE[:, 1], ax=_axes())
+    kappa, delta = (line.get_ydata() for line in ax.get_lines())
+    np.testing.assert_allclose([kappa[0], delta[0]], [1.0, 1.0], rtol=1e-12)
+
+
+def test_joint_coordinate_units_from_a_model():
+    import pinocchio as pin
+
+    model = pin.Model()
+    parent = model.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "hinge")
+    model.addJoint(parent, pin.JointModelPX(), pin.SE3.Identity(), "slider")
+    names, units = figures.joint_coordinate_units(model)
+    assert (names, units) == (["hinge", "slider"], ["rad", "m"])
+
+
+def _rows(folder: str, table: str) -> list[dict]:
+    rows = json.loads((ROOT / folder / table).read_text(encoding="utf-8"))["rows"]
+    return [{k: float("nan") if v is None else v for k, v in row.items()} for row in rows]
+
+
+@pytest.mark.parametrize("png", sorted(bench_plots.FIGURES))
+def test_bench_figures_label_units(png, tmp_path):
+    table, _, keep = bench_plots.FIGURES[png]
+    rows = [r for r in _rows("benchmarks", table) if keep(r)]
+    name = {
+        "conditioning_cost.png": "draw_cost_vs_n",
+        "estimators_pareto.png": "draw_pareto",
+        "accuracy_vs_kappa.png": "draw_accuracy_vs_kappa",
+        "dynamics_cost.png": "draw_dynamics_cost",
+        "work_precision.png": "draw_work_precision",
+        "watch_cost.png": "draw_watch_cost",
+        "denoc_cost.png": "draw_denoc_cost",
+    }[png]
+    draw = getattr(bench_plots, name)
+    args = (rows, rows[0]["n"]) if "n" in inspect.signature(draw).parameters else (rows,)
+    ax = _axes()
+    assert draw(*args, ax=ax) is ax
+    _assert_units(ax, name)
+
+
+def test_every_bench_draw_function_is_in_the_figure_table():
+    drawn = {n for n in bench_plots.__all__ if n.startswith("draw_")}
+    assert len(drawn) == len(bench_plots.FIGURES)
+
+
+def test_watch_cost_bars_are_on_a_linear_axis():
+    ax = bench_plots.draw_watch_cost(_rows("benchmarks", "watch.json"), ax=_axes())
+    assert ax.get_yscale() == "linear"
+
+
+def test_replot_redraws_from_the_tables_alone(tmp_path):
+    for table in ("watch.json", "denoc.json"):
+        (tmp_path / table).write_text((ROOT / "benchmarks" / table).read_text())
+    written = bench_plots.replot(tmp_path)
+    assert sorted(p.name for p in written) == ["denoc_cost.png", "watch_cost.png"]
+    assert all(p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in written)
+
+
+def _survey(count: int):
+    robots = []
+    for k in range(count):
+        delta = np.exp(RNG.normal(size=30)) * (k + 1)
+        robots.append(
+            SimpleNamespace(
+                name=f"robot_{k}",
+                metrics={"delta": delta, "kappa": 2.0 * delta},
+                quantiles={"delta": {"min": delta.min()}, "kappa": {"max": 2 * delta.max()}},
+                pearson_log=1.0 - k / 100,
+                alpha=2.0,
+            )
+        )
+    return SimpleNamespace(robots=robots)
+
+
+def test_survey_scatter_uses_categorical_highlights_and_units():
+    ax = survey_plots.plot_kappa_vs_delta(_survey(20), ax=_axes())
+    _assert_units(ax, "plot_kappa_vs_delta")
+    coloured = [c for c in ax.collections if c.get_label().startswith("robot_")]
+    assert len(coloured) == survey_plots.HIGHLIGHTED
+    assert {c.get_label().split(" ")[0] for c in coloured} == {
+        f"robot_{k}" for k in range(20 - survey_plots.HIGHLIGHTED, 20)
+    }
+
+
+def test_survey_grid_has_units_and_few_ticks():
+    fig = survey_plots.plot_kappa_vs_delta_grid(_survey(7), fig=Figure(figsize=(12, 6)))
+    assert UNIT.search(fig.get_supxlabel()) and UNIT.search(fig.get_supylabel())
+    fig.canvas.draw()
+    for ax in fig.axes:
+        if ax.axison:
+            low, high = sorted(ax.get_xlim())
+            shown = [
+                t
+                for t in ax.get_xticklabels()
+                if t.get_text() and low <= t.get_position()[0] <= high
+            ]
+            assert len(shown) <= 4, [t.get_text() for t in shown]
