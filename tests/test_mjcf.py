@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
@@ -11,6 +12,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from gimwatch.cli import main
 from gimwatch.crosscheck import crosscheck_robot
 from gimwatch.errors import GimwatchError, URDFError
 from gimwatch.model.mujoco_model import (
@@ -187,3 +189,30 @@ def test_third_party_libraries_stay_quiet_on_stderr(command, tmp_path):
         )
         assert run.returncode == 0, run.stderr
         assert run.stderr == "", run.stderr
+
+
+_DOUBTFUL_INERTIA = """<mujoco model="doubtful">
+  <worldbody>
+    <body name="upper">
+      <joint name="shoulder" type="hinge" axis="0 1 0"/>
+      <inertial pos="0 0 -0.5" mass="1" diaginertia="0.1 0.1 1.0"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_mjcf_inertia_violating_the_triangle_inequality_warns_then_mujoco_refuses(tmp_path, capsys):
+    """Principal moments 0.1, 0.1, 1.0: analyze warns in one line (as for URDF) and computes
+    the Pinocchio result (M = Iyy + m·0.5² = 0.35); crosscheck's only reference for an MJCF
+    robot is MuJoCo, which refuses the body, so it stops with one line naming it."""
+    path = tmp_path / "doubtful.xml"
+    path.write_text(_DOUBTFUL_INERTIA)
+    assert main(["analyze", str(path), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1 and "triangle inequality" in captured.err
+    assert "(upper)" in captured.err and str(path) in captured.err
+    assert json.loads(captured.out)["configurations"][0]["lambda_max"] == pytest.approx(0.35)
+    assert main(["crosscheck", str(path)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and "link 'upper'" in err[-1] and "A + B >= C" in err[-1]

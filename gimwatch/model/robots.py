@@ -36,6 +36,7 @@ import pinocchio as pin
 
 from gimwatch.errors import ExampleRobotWarning, InputError, RobotError, URDFError
 from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
+from gimwatch.model.mjcf_values import check_mjcf
 
 __all__ = [
     "EXAMPLE_ROBOT_NOTES",
@@ -330,7 +331,8 @@ def _build_mjcf_model(source: str, floating: bool, xml: str) -> pin.Model:
         except Exception as exc:  # boost.python raises RuntimeError, ValueError, ...
             model, failure = None, exc
     if model is None:
-        detail = " ".join(str(failure).split()) or type(failure).__name__
+        # Pinocchio's message starts with its C++ source location; keep what follows.
+        detail = " ".join(str(failure).split("message:")[-1].split()) or type(failure).__name__
         if complaints:
             detail += f" ({complaints[0]})"
         raise URDFError(source, f"Pinocchio cannot read this MJCF: {detail}")
@@ -338,6 +340,7 @@ def _build_mjcf_model(source: str, floating: bool, xml: str) -> pin.Model:
 
 
 def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> Robot:
+    check_mjcf(xml, source)
     model = _build_mjcf_model(source, floating, xml)
     if model.nv == 0:
         raise RobotError(
