@@ -358,3 +358,162 @@ def test_claims_quote_the_stress_table():
         float(f"{10 ** np.ceil(np.log10(straight)):.0e}"),
         float(f"{kappa:.0e}"),
     ]
+
+
+def _stress_rows() -> list[str]:
+    return _table_rows(_text("benchmarks/stress.md"), set(test_stress.PUBLISHED_ERRORS))
+
+
+def cell(row: str, index: int) -> float | None:
+    """Cell ``index`` of a stress-table row as a float (None for "–")."""
+    text = row.strip("|").split("|")[index].strip()
+    return None if text == "–" else float(text)
+
+
+# --- the sample output and robot counts -------------------------------------------------------
+
+SAMPLE_OUTPUT_PAGES = ("README.md", "docs/getting-started.md", "docs/guide/analyze.md")
+
+
+@pytest.mark.parametrize("page", SAMPLE_OUTPUT_PAGES)
+def test_analyze_sample_output_is_what_the_command_prints(page, capsys):
+    from gimwatch.cli import main
+
+    assert main(["analyze", "ur5"]) == 0
+    printed = capsys.readouterr().out.rstrip("\n")
+    block = re.search(r"```text\n\$ gimwatch analyze ur5\n(.*?)\n```", _text(page), re.DOTALL)
+    assert block, f"{page}: no `gimwatch analyze ur5` sample output"
+    assert block.group(1) == printed, f"{page}:\n{block.group(1)}\n!=\n{printed}"
+
+
+def test_readme_quotes_the_sample_output():
+    from gimwatch.cli import main
+
+    rows = json.loads(_run_json(main, ["analyze", "ur5", "--json"]))["configurations"]
+    match = _find("README.md", r"κ is ([\d.]+); δ = ([\d.]+) is a lower bound")
+    assert _numbers(match) == [
+        round(rows[0]["kappa"], 1),
+        round(rows[0]["diagonal_ratio"], 1),
+    ]
+
+
+def _run_json(main, argv) -> str:
+    import contextlib
+    import io
+
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        assert main(argv) == 0
+    return buffer.getvalue()
+
+
+def _urdf_robots() -> list[str]:
+    from gimwatch.model.robots import RobotError, _example_robot_urdf, example_robot_names
+
+    names = []
+    for name in example_robot_names():
+        try:
+            _example_robot_urdf(name)
+        except RobotError:
+            continue
+        names.append(name)
+    return names
+
+
+def test_robot_counts_are_the_library_and_survey_counts():
+    from gimwatch.model.robots import example_robot_names
+
+    everything = len(example_robot_names())
+    readme = _find("README.md", r"one of the\s+(\d+) robots of example-robot-data")
+    assert int(readme.group(1)) == everything
+    analyze = _find("docs/guide/analyze.md", r"\((\d+) names in [\d.]+\)[^.]*\. (\d+) load;")
+    assert _numbers(analyze) == [everything, len(_urdf_robots())]
+    bad = _find("docs/guide/bad-input.md", r"calibrated on the (\d+) URDFs of example-robot-data")
+    assert int(bad.group(1)) == len(_urdf_robots())
+    surveyed = len(json.loads((BENCH / "survey" / "survey.json").read_text())["robots"])
+    for page, pattern in (
+        ("README.md", r"\[(\d+) real robots\]\(docs/findings/survey.md\)"),
+        ("docs/index.md", r"(\d+) real robots, chains of"),
+        ("docs/guide/survey.md", r"What it found on (\d+) robots"),
+        ("docs/findings/claims.md", r"but \d+ of (\d+) robots have median"),
+    ):
+        assert int(_find(page, pattern).group(1)) == surveyed, page
+    longest = max(int(r["n"]) for r in _csv("longchain_analyze.csv"))
+    assert _figure(_find("docs/index.md", r"chains of ([\d,]+) links").group(1)) == longest
+
+
+def test_triangle_inequality_warning_count_is_the_robots_that_warn():
+    import warnings
+
+    from gimwatch.errors import URDFWarning
+    from gimwatch.model.robots import _example_robot_urdf, _read_urdf
+    from gimwatch.model.urdf_text import check_urdf
+
+    warned = []
+    for name in _urdf_robots():
+        path = _example_robot_urdf(name)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            check_urdf(_read_urdf(path), str(path))
+        if any(issubclass(w.category, URDFWarning) for w in caught):
+            warned.append(name)
+    match = _find(
+        "docs/guide/bad-input.md", r"a \+ b ≥ c — (\d+) real robots do \(ANYmal, Go1, Allegro"
+    )
+    assert int(match.group(1)) == len(warned), warned
+    for family in ("anymal", "go1", "allegro_right_hand", "tiago"):
+        assert family in warned
+
+
+def test_stated_thresholds_are_the_code_constants():
+    from gimwatch.cli._progress import ProgressBar
+    from gimwatch.crosscheck import DEFAULT_TOLERANCE
+    from gimwatch.model import urdf_values
+    from gimwatch.model.robots import DATA_NV_LIMIT, MAX_TREE_DEPTH, MAX_URDF_BYTES
+    from gimwatch.simulation.alarm_actions import RTOL_FLOOR
+    from gimwatch.simulation.integrators import MIN_STEP_FRACTION
+    from gimwatch.stress import reference_planar, reference_tree, suite
+
+    hard = "docs/findings/hard-cases.md"
+    assert float(_find(hard, r"CRBA \(relative error ≤ ([\d.e-]+)\)").group(1)) == suite.GIM_RTOL
+    assert suite.error_constant(49) == 10 * 7  # "C = 10·√nv"
+    _find(hard, r"C·κ·eps, C = 10·√nv\*\*, of an mpmath reference at 50\s+digits")
+    digits = {reference_planar.REFERENCE_DIGITS, reference_tree.REFERENCE_DIGITS}
+    assert digits == {50}
+    for page in ("docs/guide/bench.md", "docs/findings/accuracy-costs.md"):
+        assert int(_find(page, r"against a (\d+)-digit mpmath reference").group(1)) == 50
+    assert int(_find("README.md", r"against a (\d+)-digit mpmath reference").group(1)) == 50
+    match = _find(hard, r"a (\d+) s\s+gravity simulation \(DOP853 at ([\d.e-]+), RK4 at 1 ms")
+    assert _numbers(match) == [suite.SIMULATION_S, 1e-10]
+    drift = _find(hard, r"relative energy drift ≤ ([\d.e-]+) \(10× the worst measured\)")
+    assert float(drift.group(1)) == suite.ENERGY_DRIFT_LIMIT
+    worst = max(cell(row, 8) for row in _stress_rows() if cell(row, 8) is not None)
+    assert round(np.log10(suite.ENERGY_DRIFT_LIMIT / worst)) == 1, worst
+    assert int(_find(hard, r"\(the limit is `DATA_NV_LIMIT` = (\d+)\)").group(1)) == DATA_NV_LIMIT
+    assert (
+        int(_find("docs/findings/long-chains.md", r"Above nv = (\d+) \(`DATA_NV_LIMIT`\)").group(1))
+        == DATA_NV_LIMIT
+    )
+    assert int(_find("docs/guide/analyze.md", r"above nv = (\d+), or with").group(1)) == (
+        DATA_NV_LIMIT
+    )
+    floor = _find(hard, r"rtol ← max\(rtol₀ · threshold / estimate, ([\d.e-]+)\)")
+    assert float(floor.group(1)) == RTOL_FLOOR
+    collapse = _find(hard, r"size collapses below ([\d.e-]+) × duration")
+    assert float(collapse.group(1)) == MIN_STEP_FRACTION
+    depth = _find("docs/findings/long-chains.md", r"chains deeper than\s+([\d,]+) links")
+    assert _figure(depth.group(1)) == MAX_TREE_DEPTH
+    crosscheck = _find("docs/guide/crosscheck.md", r"within the tolerance\s+\(([\d.e-]+)\)")
+    assert float(crosscheck.group(1)) == DEFAULT_TOLERANCE
+    assert f"[--tolerance {DEFAULT_TOLERANCE:.0e}]" in _text("docs/guide/cli.md")
+    inertia = _find(
+        "docs/guide/bad-input.md", r"below −\(([\d.e-]+) kg m² \+ ([\d.e-]+) · largest\)"
+    )
+    assert _numbers(inertia) == [urdf_values.INERTIA_ATOL_KG_M2, urdf_values.INERTIA_RTOL]
+    size = _find("docs/guide/bad-input.md", r"files over (\d+) MB")
+    assert int(size.group(1)) * 1024 * 1024 == MAX_URDF_BYTES
+    delay = _find("docs/guide/simulate.md", r"A progress bar appears on stderr after (\d+) s")
+    import inspect
+
+    default = inspect.signature(ProgressBar).parameters["delay_s"].default
+    assert float(delay.group(1)) == default
