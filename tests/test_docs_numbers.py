@@ -517,3 +517,109 @@ def test_stated_thresholds_are_the_code_constants():
 
     default = inspect.signature(ProgressBar).parameters["delay_s"].default
     assert float(delay.group(1)) == default
+
+
+# --- prose around the stress table and the tighten run ----------------------------------------
+
+
+def _one_digit_up(value: float) -> float:
+    """``value`` rounded up to one significant digit (2.4e-12 → 3e-12), as "within" quotes it."""
+    exponent = np.floor(np.log10(value))
+    return float(f"{np.ceil(value / 10**exponent - 1e-9):.0f}e{exponent:.0f}")
+
+
+def test_hard_cases_prose_quotes_the_stress_table():
+    page = "docs/findings/hard-cases.md"
+    rows = {r.strip("|").split("|")[0].strip(): r for r in _stress_rows()}
+    aba, crba, denoc, drift = 3, 4, 5, 8
+    resolved = [r for r in rows.values() if cell(r, 2) < 1e15]
+    recursions = [cell(r, i) for r in rows.values() for i in (aba, denoc) if cell(r, i)]
+    match = _find(page, r"both stay within ([\d.e-]+) of the reference up to κ ≈ ([\d.e+]+)")
+    assert _numbers(match) == [
+        float(f"{max(recursions):.0e}"),
+        float(f"{max(cell(r, 2) for r in resolved):.0e}"),
+    ]
+    match = _find(page, r"\(([\d.e-]+) curled, ([\d.e-]+) straight;")
+    assert _numbers(match) == [
+        float(f"{cell(rows['curled-500'], denoc):.0e}"),
+        float(f"{cell(rows['straight-500'], denoc):.0e}"),
+    ]
+    match = _find(page, r"O\(n\) path with energy drift below ([\d.e-]+)\)")
+    longest = max(cell(rows[c], drift) for c in ("curled-500", "straight-500"))
+    assert float(match.group(1)) == _one_digit_up(longest)
+    match = _find(page, r"in proportion to κ \(([\d.e-]+) on the 200-link chain\)")
+    assert float(match.group(1)) == float(f"{cell(rows['straight-200'], crba):.0e}")
+    match = _find(page, r"every method\s+lands within ([\d.e-]+) of mpmath")
+    tapered = max(cell(rows["tapered-30"], i) for i in (aba, crba, denoc))
+    assert float(match.group(1)) == _one_digit_up(tapered)
+    _find(page, r"`tapered-30` \(masses and lengths falling to 1e-6 of the root's\)")
+    from gimwatch.stress.cases import CASES
+
+    spec = CASES["tapered-30"].spec
+    assert spec.masses_kg[-1] / spec.masses_kg[0] == pytest.approx(1e-6)
+    assert spec.lengths_m[-1] / spec.lengths_m[0] == pytest.approx(1e-6)
+    properties = (ROOT / "tests" / "test_stress_properties.py").read_text()
+    examples = re.search(r"max_examples=(\d+)", properties).group(1)
+    chains = _find(page, r"the O\(n\) diagonal on (\d+) random chains")
+    assert chains.group(1) == examples
+
+
+def test_tighten_figures_are_the_committed_run():
+    rows = _csv("tighten.csv")
+    pairs, ratios = {}, []
+    for case in dict.fromkeys(r["case"] for r in rows):
+        fixed = sorted(
+            (float(r["wall_time_s"]), float(r["error_rad"]))
+            for r in rows
+            if r["case"] == case and r["mode"] == "fixed"
+        )
+        (tight,) = [r for r in rows if r["case"] == case and r["mode"] == "tighten"]
+        times, errors = np.log([f[0] for f in fixed]), np.log([f[1] for f in fixed])
+        same_time = float(np.exp(np.interp(np.log(float(tight["wall_time_s"])), times, errors)))
+        pairs[case] = (float(tight["error_rad"]), same_time)
+        ratios.append(float(tight["error_rad"]) / same_time)
+        assert float(tight["rtol0"]) == 1e-5
+    page = "docs/findings/hard-cases.md"
+    match = _find(page, r"\*\*([\d.]+)–(\d+)× less accurate than a fixed tolerance")
+    assert _numbers(match) == [round(min(ratios), 1), round(max(ratios))]
+    match = _find(
+        page,
+        r"\(straight-20: ([\d.e-]+) rad vs ([\d.e-]+); feather root: ([\d.e-]+) vs ([\d.e-]+);\s+"
+        r"heavy root: ([\d.e-]+) vs ([\d.e-]+)\)",
+    )
+    quoted = [(match.group(i), match.group(i + 1)) for i in (1, 3, 5)]
+    cases = ("straight-20", "feather-root-12", "heavy-root-12")
+    for (tight, fixed), case in zip(quoted, cases, strict=True):
+        assert float(tight) == float(f"{pairs[case][0]:.1e}"), case
+        assert float(fixed) == float(f"{pairs[case][1]:.1e}"), case
+    assert len(pairs) == 3 and "on three hard chains" in " ".join(_text(page).split())
+    match = _find(page, r"`tighten` from rtol ([\d.e-]+) with the threshold")
+    assert float(match.group(1)) == 1e-5
+
+
+def test_claims_figures_are_the_library_and_demo_values():
+    import gimwatch as gw
+
+    demo = test_simulate.PUBLISHED_DEMO
+    claims = "docs/findings/claims.md"
+    worst = max(abs(demo[n]["worst"] - 1) for n in (10, 20))
+    match = _find(claims, r"swinging 10- and 20-link chains is within (\d+) % of 4n⁴")
+    assert int(match.group(1)) == round(100 * worst)
+    forward, backward = [], []
+    for n in (4, 10, 20):
+        robot = gw.load_robot(f"chain:{n}")
+        record = gw.analyze_configuration(robot, gw.neutral_configuration(robot))
+        assert record.diagonal_ratio == pytest.approx(n**3, rel=1e-14)  # "δ = n³ exactly"
+        forward.append(record.pivot_ratio_forward)
+        backward.append(record.pivot_ratio_backward)
+    match = _find(claims, r"grow with κ \(([\d,]+), ([\d,]+), ([\d,]+) for straight n = 4, 10, 20")
+    assert [_figure(x) for x in match.groups()] == [
+        float(f"{x:.4g}") if x > 1e4 else round(x) for x in forward
+    ]
+    match = _find(claims, r"gives ([\d.]+) \(n = 4\) to ([\d.]+) for\s+every straight chain")
+    assert _numbers(match) == [round(min(backward), 3), round(max(backward), 3)]
+    _find(claims, r"δ = n³ exactly for straight")
+    readme = _find("README.md", r"κ/4n⁴ = ([\d.]+) \(n = 4\) …")
+    assert float(readme.group(1)) == round(demo[4]["worst"], 2)
+    serial = _find("README.md", r"\*\*on serial chains\*\*: Pearson\(log δ, log κ\) ≈ ([\d.]+);")
+    assert {round(demo[n]["pearson"], 1) for n in (4, 10, 20)} == {float(serial.group(1))}
