@@ -623,3 +623,109 @@ def test_claims_figures_are_the_library_and_demo_values():
     assert float(readme.group(1)) == round(demo[4]["worst"], 2)
     serial = _find("README.md", r"\*\*on serial chains\*\*: Pearson\(log δ, log κ\) ≈ ([\d.]+);")
     assert {round(demo[n]["pearson"], 1) for n in (4, 10, 20)} == {float(serial.group(1))}
+
+
+# --- survey prose -------------------------------------------------------------------------------
+
+SERIAL_ARMS = ("ur3", "ur5", "ur10", "panda", "xarm7", "z1", "bravo7_no_ee", "talos_arm")
+BRANCHED = (
+    "anymal",
+    "anymal_c",
+    "baxter",
+    "human",
+    "icub",
+    "icub_reduced",
+    "simple_humanoid",
+    "simple_humanoid_classical",
+)
+
+
+def test_survey_prose_is_the_committed_survey():
+    from gimwatch.survey.trajectory import TrajectorySettings
+
+    survey = json.loads((BENCH / "survey" / "survey.json").read_text())
+    robots = {r["robot"]: r for r in survey["robots"]}
+    page = "docs/findings/survey.md"
+
+    def runs(key):
+        values = [(r["trajectories"] or {}).get(key) for r in survey["robots"]]
+        return [v for v in values if v is not None]
+
+    budget = sorted(
+        r["robot"]
+        for r in survey["robots"]
+        if any(p["status"] == "step-budget" for p in (r["trajectories"] or {}).get("per_run", []))
+    )
+    match = _find(page, r"(\d+) completed; (\w+) and (\w+)\s+hit the step budget")
+    assert sorted(match.groups()[1:]) == budget
+    match = _find(page, r"r\(log δ, log κ\) ([\d.]+), αδ error median ([\d.]+)\)")
+    assert _numbers(match) == [
+        round(float(np.median(runs("pearson_log_delta_log_kappa_median"))), 2),
+        round(float(np.median(runs("alpha_delta_rel_error_median"))), 3),
+    ]
+    negative = {
+        r["robot"]
+        for r in survey["robots"]
+        if ((r["trajectories"] or {}).get("pearson_log_delta_log_kappa_median") or 0) < 0
+    }
+    _find(page, r"\(anymal_c,\s+icub_reduced, both simple_humanoids: r < 0;")
+    assert negative == {"anymal_c", "icub_reduced", "simple_humanoid", "simple_humanoid_classical"}
+
+    arms = [robots[name] for name in SERIAL_ARMS]
+    pearson = min(r["pearson_log_delta_log_kappa"] for r in arms)
+    match = _find(page, r"Talos arm\): Pearson r\(log δ, log κ\) ≥ ([\d.]+),")
+    assert float(match.group(1)) == np.floor(100 * pearson) / 100
+    assert all(r["extreme_dofs"]["min_diagonal_dof"]["frequency"] == 1.0 for r in arms)
+    shares = [r["lambda_min_on_min_diagonal"] for r in arms]
+    match = _find(page, r"smallest M_ii, in ([\d.]+)–(\d+)% of samples")
+    assert _numbers(match) == [np.floor(1000 * min(shares)) / 10, 100 * max(shares)]
+    errors = [r["alpha_delta_rel_error_median"] for r in arms]
+    match = _find(page, r"αδ is\s+within (\d+)–(\d+)% \(median relative error\)")
+    assert _numbers(match) == [round(100 * min(errors)), round(100 * max(errors))]
+
+    below = {
+        r["robot"]
+        for r in survey["robots"]
+        if r["pearson_log_delta_log_kappa"] is not None and r["pearson_log_delta_log_kappa"] < 0.5
+    }
+    assert below == set(BRANCHED)
+    _find(page, r"r < 0.5 for anymal, anymal_c, baxter, human, icub,\s+icub_reduced and both")
+    lowest = min(robots[n]["pearson_log_delta_log_kappa"] for n in BRANCHED)
+    assert _figure(_find(page, r"\(down to r = (−[\d.]+)\)").group(1)) == round(lowest, 2)
+    shares = [robots[n]["lambda_min_on_min_diagonal"] for n in BRANCHED]
+    match = _find(page, r"smallest-M_ii coordinate in only (\d+)–(\d+)% of samples")
+    assert _numbers(match) == [round(100 * min(shares)), round(100 * max(shares))]
+
+    icub = robots["icub"]
+    match = _find(
+        page, r"icub's is numerically singular \(κ = ([\d.e]+)\),\s+so its αδ is off by ([\d.e]+);"
+    )
+    assert float(match.group(1)) == float(f"{icub['quantiles']['kappa']['max']:.1e}")
+    assert float(match.group(2)) == 10 ** np.floor(np.log10(icub["alpha_delta_rel_error_median"]))
+    kinova = _find(page, r"\(αδ error\s+×(\d+) median\)")
+    assert int(kinova.group(1)) == round(robots["kinova"]["alpha_delta_rel_error_median"])
+    _find(page, r"a finger: PR2, TIAGo\), r is undefined")
+    assert robots["pr2"]["pearson_log_delta_log_kappa"] is None
+    assert robots["tiago"]["pearson_log_delta_log_kappa"] is None
+
+    settings = TrajectorySettings()
+    match = _find(page, r"N short simulated runs \(default (\d+) of (\d+) s\)")
+    assert _numbers(match) == [settings.count, settings.duration_s]
+    match = _find(page, r"c_i = ([\d.]+)/s · M_ii\(q0\)")
+    assert float(match.group(1)) == settings.damping_per_s
+    match = _find(page, r"DOP853 at rtol ([\d.e-]+), or RK4")
+    assert float(match.group(1)) == settings.rtol
+    match = _find(page, r"a stiff run stops after (\d+) steps")
+    assert int(match.group(1)) == settings.max_steps
+    match = _find(page, r"the watch samples κ\s+and δ every ([\d.]+) s")
+    assert float(match.group(1)) == settings.sample_s
+    import inspect
+
+    from gimwatch.survey.run import run_survey
+
+    chunk = inspect.signature(run_survey).parameters["chunk_size"].default
+    assert int(_find(page, r"cut into chunks of (\d+)\)").group(1)) == chunk
+    assert (
+        int(_find(page, r"survey all --samples (\d+) --trajectory").group(1))
+        == (survey["samples_per_robot"])
+    )
