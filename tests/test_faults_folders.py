@@ -121,7 +121,7 @@ def test_signal_during_simulate_leaves_a_complete_new_folder(old_simulation, pha
     assert code == STATUS[signum], err
     assert err[-1] == "gimwatch: interrupted; results so far were written", err
     assert not any("Traceback" in line for line in err), err
-    assert _complete(out)["writer"] == "simulate"
+    assert _complete(out)["writer"] == "simulate" and _tree(out) != before
     summary = json.loads((out / "summary.json").read_text())
     # at "compute" the run stopped after its first step (t = 0 kept); later, it had completed
     assert (summary["status"], summary["samples"]) == (
@@ -319,10 +319,10 @@ def test_a_folder_under_a_regular_file_is_one_line_and_leaves_nothing(tmp_path, 
     assert main(["simulate", str(scene), "-o", str(tmp_path / "a" / "b" / "out")]) == 2
     err = capsys.readouterr().err
     assert (
-        err
-        == f"gimwatch: error: {tmp_path / 'a' / 'b' / 'out'}: cannot be written (Not a directory)\n"
+        err == f"gimwatch: error: {tmp_path / 'a'}: is a file, not a folder; give a folder name\n"
     )
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "scene.toml"]
+    assert (tmp_path / "a").read_text() == "a file"
 
 
 def test_parents_made_for_a_survey_that_wrote_nothing_are_removed(tmp_path, capsys):

@@ -39,11 +39,12 @@ def run(args: argparse.Namespace) -> int:
     if args.backend is not None:
         scene = dataclasses.replace(scene, backend=args.backend)
     output = Path(args.output) if args.output else Path("results") / Path(args.scene).stem
+    # compiled code runs from here on: a signal is noted and acted on between steps
+    with LATCH.deferred("hard"):
+        simulation = Simulation(scene)  # every error that needs the robot is raised here
+        LATCH.check()
     with Reservation(output):  # refused (another writer, not ours) before the work
-        # compiled code runs from here on: a signal is noted and acted on between steps
         with LATCH.deferred("hard"):
-            simulation = Simulation(scene)  # every error that needs the robot is raised here
-            LATCH.check()
             bar = ProgressBar(f"{simulation.robot.name}")
 
             def progress(fraction: float) -> object:

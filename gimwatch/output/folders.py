@@ -113,6 +113,13 @@ def check_folder_target(path: str | Path) -> Path:
         mode = os.lstat(target).st_mode
     except FileNotFoundError:
         return target
+    except NotADirectoryError as exc:  # a file where a parent folder should be
+        for parent in target.parents:
+            if parent.exists() and not parent.is_dir():
+                raise OutputError(
+                    str(parent), "is a file, not a folder; give a folder name"
+                ) from exc
+        raise OutputError(str(path), _problem(exc)) from exc
     except OSError as exc:
         raise OutputError(str(path), _problem(exc)) from exc
     if stat.S_ISLNK(mode):
