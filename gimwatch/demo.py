@@ -80,6 +80,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
     t, eig = series(first, "eigenvalues")
     plots.plot_eigenvalues(t, eig, ax=axes[0, 0])
     plots.plot_diagonal(t, series(first, "diagonal")[1], ax=axes[0, 1])
+    axes[0, 1].set_ylabel("diagonal element M_ii [kg·m²]")  # the rod chains are all revolute
     axes[1, 0].semilogy(t, series(first, "kappa")[1])
     axes[1, 0].set(xlabel="time [s]", ylabel="κ₂ = λmax/λmin [-]", title="Condition number")
     axes[1, 1].semilogy(t, series(first, "diagonal_ratio")[1])
@@ -92,6 +93,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
     for ax, n in zip(axes[0], longer, strict=True):
         t, kappa = series(n, "kappa")
         plots.plot_kappa_and_delta(t, kappa, series(n, "diagonal_ratio")[1], label=f"n={n}", ax=ax)
+        ax.set_title(f"{n}-link chain")  # the figure's title says what is drawn
     fig.suptitle("Fig. 3 — condition number and diagonal ratio, each relative to t = 0")
     save(fig, "fig3_kappa_delta.png")
 
@@ -106,6 +108,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
             label=f"n={n}",
             ax=ax,
         )
+        ax.set_title(f"{n}-link chain")
     fig.suptitle("Fig. 4 — pivot ratios of Gaussian elimination")
     save(fig, "fig4_pivot_ratios.png")
 
@@ -115,6 +118,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
         plots.plot_kappa_and_scaled(
             t, kappa, series(n, "scaled_diagonal_ratio")[1], label=f"n={n}", ax=ax
         )
+        ax.set_title(f"{n}-link chain")
     fig.suptitle("Fig. 5 — condition number and scaled diagonal ratio αδ (α from t = 0)")
     save(fig, "fig5_kappa_scaled.png")
 

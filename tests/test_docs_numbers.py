@@ -358,3 +358,374 @@ def test_claims_quote_the_stress_table():
         float(f"{10 ** np.ceil(np.log10(straight)):.0e}"),
         float(f"{kappa:.0e}"),
     ]
+
+
+def _stress_rows() -> list[str]:
+    return _table_rows(_text("benchmarks/stress.md"), set(test_stress.PUBLISHED_ERRORS))
+
+
+def cell(row: str, index: int) -> float | None:
+    """Cell ``index`` of a stress-table row as a float (None for "–")."""
+    text = row.strip("|").split("|")[index].strip()
+    return None if text == "–" else float(text)
+
+
+# --- the sample output and robot counts -------------------------------------------------------
+
+SAMPLE_OUTPUT_PAGES = ("README.md", "docs/getting-started.md", "docs/guide/analyze.md")
+
+
+@pytest.mark.parametrize("page", SAMPLE_OUTPUT_PAGES)
+def test_analyze_sample_output_is_what_the_command_prints(page, capsys):
+    from gimwatch.cli import main
+
+    assert main(["analyze", "ur5"]) == 0
+    printed = capsys.readouterr().out.rstrip("\n")
+    block = re.search(r"```text\n\$ gimwatch analyze ur5\n(.*?)\n```", _text(page), re.DOTALL)
+    assert block, f"{page}: no `gimwatch analyze ur5` sample output"
+    assert block.group(1) == printed, f"{page}:\n{block.group(1)}\n!=\n{printed}"
+
+
+def test_readme_quotes_the_sample_output():
+    from gimwatch.cli import main
+
+    rows = json.loads(_run_json(main, ["analyze", "ur5", "--json"]))["configurations"]
+    match = _find("README.md", r"κ is ([\d.]+); δ = ([\d.]+) is a lower bound")
+    assert _numbers(match) == [
+        round(rows[0]["kappa"], 1),
+        round(rows[0]["diagonal_ratio"], 1),
+    ]
+
+
+def _run_json(main, argv) -> str:
+    import contextlib
+    import io
+
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        assert main(argv) == 0
+    return buffer.getvalue()
+
+
+def _urdf_robots() -> list[str]:
+    from gimwatch.model.robots import RobotError, _example_robot_urdf, example_robot_names
+
+    names = []
+    for name in example_robot_names():
+        try:
+            _example_robot_urdf(name)
+        except RobotError:
+            continue
+        names.append(name)
+    return names
+
+
+def test_robot_counts_are_the_library_and_survey_counts():
+    from gimwatch.model.robots import example_robot_names
+
+    everything = len(example_robot_names())
+    readme = _find("README.md", r"one of the\s+(\d+) robots of example-robot-data")
+    assert int(readme.group(1)) == everything
+    analyze = _find("docs/guide/analyze.md", r"\((\d+) names in [\d.]+\)[^.]*\. (\d+) load;")
+    assert _numbers(analyze) == [everything, len(_urdf_robots())]
+    bad = _find("docs/guide/bad-input.md", r"calibrated on the (\d+) URDFs of example-robot-data")
+    assert int(bad.group(1)) == len(_urdf_robots())
+    surveyed = len(json.loads((BENCH / "survey" / "survey.json").read_text())["robots"])
+    for page, pattern in (
+        ("README.md", r"\[(\d+) real robots\]\(docs/findings/survey.md\)"),
+        ("docs/index.md", r"(\d+) real robots, chains of"),
+        ("docs/guide/survey.md", r"What it found on (\d+) robots"),
+        ("docs/findings/claims.md", r"but \d+ of (\d+) robots have median"),
+    ):
+        assert int(_find(page, pattern).group(1)) == surveyed, page
+    longest = max(int(r["n"]) for r in _csv("longchain_analyze.csv"))
+    assert _figure(_find("docs/index.md", r"chains of ([\d,]+) links").group(1)) == longest
+
+
+def test_triangle_inequality_warning_count_is_the_robots_that_warn():
+    import warnings
+
+    from gimwatch.errors import URDFWarning
+    from gimwatch.model.robots import _example_robot_urdf, _read_urdf
+    from gimwatch.model.urdf_text import check_urdf
+
+    warned = []
+    for name in _urdf_robots():
+        path = _example_robot_urdf(name)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            check_urdf(_read_urdf(path), str(path))
+        if any(issubclass(w.category, URDFWarning) for w in caught):
+            warned.append(name)
+    match = _find(
+        "docs/guide/bad-input.md", r"a \+ b ≥ c — (\d+) real robots do \(ANYmal, Go1, Allegro"
+    )
+    assert int(match.group(1)) == len(warned), warned
+    for family in ("anymal", "go1", "allegro_right_hand", "tiago"):
+        assert family in warned
+
+
+def test_stated_thresholds_are_the_code_constants():
+    from gimwatch.cli._progress import ProgressBar
+    from gimwatch.crosscheck import DEFAULT_TOLERANCE
+    from gimwatch.model import urdf_values
+    from gimwatch.model.robots import DATA_NV_LIMIT, MAX_TREE_DEPTH, MAX_URDF_BYTES
+    from gimwatch.simulation.alarm_actions import RTOL_FLOOR
+    from gimwatch.simulation.integrators import MIN_STEP_FRACTION
+    from gimwatch.stress import reference_planar, reference_tree, suite
+
+    hard = "docs/findings/hard-cases.md"
+    assert float(_find(hard, r"CRBA \(relative error ≤ ([\d.e-]+)\)").group(1)) == suite.GIM_RTOL
+    assert suite.error_constant(49) == 10 * 7  # "C = 10·√nv"
+    _find(hard, r"C·κ·eps, C = 10·√nv\*\*, of an mpmath reference at 50\s+digits")
+    digits = {reference_planar.REFERENCE_DIGITS, reference_tree.REFERENCE_DIGITS}
+    assert digits == {50}
+    for page in ("docs/guide/bench.md", "docs/findings/accuracy-costs.md"):
+        assert int(_find(page, r"against a (\d+)-digit mpmath reference").group(1)) == 50
+    assert int(_find("README.md", r"against a (\d+)-digit mpmath reference").group(1)) == 50
+    match = _find(hard, r"a (\d+) s\s+gravity simulation \(DOP853 at ([\d.e-]+), RK4 at 1 ms")
+    assert _numbers(match) == [suite.SIMULATION_S, 1e-10]
+    drift = _find(hard, r"relative energy drift ≤ ([\d.e-]+) \(10× the worst measured\)")
+    assert float(drift.group(1)) == suite.ENERGY_DRIFT_LIMIT
+    worst = max(cell(row, 8) for row in _stress_rows() if cell(row, 8) is not None)
+    assert round(np.log10(suite.ENERGY_DRIFT_LIMIT / worst)) == 1, worst
+    assert int(_find(hard, r"\(the limit is `DATA_NV_LIMIT` = (\d+)\)").group(1)) == DATA_NV_LIMIT
+    assert (
+        int(_find("docs/findings/long-chains.md", r"Above nv = (\d+) \(`DATA_NV_LIMIT`\)").group(1))
+        == DATA_NV_LIMIT
+    )
+    assert int(_find("docs/guide/analyze.md", r"above nv = (\d+), or with").group(1)) == (
+        DATA_NV_LIMIT
+    )
+    floor = _find(hard, r"rtol ← max\(rtol₀ · threshold / estimate, ([\d.e-]+)\)")
+    assert float(floor.group(1)) == RTOL_FLOOR
+    collapse = _find(hard, r"size collapses below ([\d.e-]+) × duration")
+    assert float(collapse.group(1)) == MIN_STEP_FRACTION
+    depth = _find("docs/findings/long-chains.md", r"chains deeper than\s+([\d,]+) links")
+    assert _figure(depth.group(1)) == MAX_TREE_DEPTH
+    crosscheck = _find("docs/guide/crosscheck.md", r"within the tolerance\s+\(([\d.e-]+)\)")
+    assert float(crosscheck.group(1)) == DEFAULT_TOLERANCE
+    assert f"[--tolerance {DEFAULT_TOLERANCE:.0e}]" in _text("docs/guide/cli.md")
+    inertia = _find(
+        "docs/guide/bad-input.md", r"below −\(([\d.e-]+) kg m² \+ ([\d.e-]+) · largest\)"
+    )
+    assert _numbers(inertia) == [urdf_values.INERTIA_ATOL_KG_M2, urdf_values.INERTIA_RTOL]
+    size = _find("docs/guide/bad-input.md", r"files over (\d+) MB")
+    assert int(size.group(1)) * 1024 * 1024 == MAX_URDF_BYTES
+    delay = _find("docs/guide/simulate.md", r"A progress bar appears on stderr after (\d+) s")
+    import inspect
+
+    default = inspect.signature(ProgressBar).parameters["delay_s"].default
+    assert float(delay.group(1)) == default
+
+
+# --- prose around the stress table and the tighten run ----------------------------------------
+
+
+def _one_digit_up(value: float) -> float:
+    """``value`` rounded up to one significant digit (2.4e-12 → 3e-12), as "within" quotes it."""
+    exponent = np.floor(np.log10(value))
+    return float(f"{np.ceil(value / 10**exponent - 1e-9):.0f}e{exponent:.0f}")
+
+
+def test_hard_cases_prose_quotes_the_stress_table():
+    page = "docs/findings/hard-cases.md"
+    rows = {r.strip("|").split("|")[0].strip(): r for r in _stress_rows()}
+    aba, crba, denoc, drift = 3, 4, 5, 8
+    resolved = [r for r in rows.values() if cell(r, 2) < 1e15]
+    recursions = [cell(r, i) for r in rows.values() for i in (aba, denoc) if cell(r, i)]
+    match = _find(page, r"both stay within ([\d.e-]+) of the reference up to κ ≈ ([\d.e+]+)")
+    assert _numbers(match) == [
+        float(f"{max(recursions):.0e}"),
+        float(f"{max(cell(r, 2) for r in resolved):.0e}"),
+    ]
+    match = _find(page, r"\(([\d.e-]+) curled, ([\d.e-]+) straight;")
+    assert _numbers(match) == [
+        float(f"{cell(rows['curled-500'], denoc):.0e}"),
+        float(f"{cell(rows['straight-500'], denoc):.0e}"),
+    ]
+    match = _find(page, r"O\(n\) path with energy drift below ([\d.e-]+)\)")
+    longest = max(cell(rows[c], drift) for c in ("curled-500", "straight-500"))
+    assert float(match.group(1)) == _one_digit_up(longest)
+    match = _find(page, r"in proportion to κ \(([\d.e-]+) on the 200-link chain\)")
+    assert float(match.group(1)) == float(f"{cell(rows['straight-200'], crba):.0e}")
+    match = _find(page, r"every method\s+lands within ([\d.e-]+) of mpmath")
+    tapered = max(cell(rows["tapered-30"], i) for i in (aba, crba, denoc))
+    assert float(match.group(1)) == _one_digit_up(tapered)
+    _find(page, r"`tapered-30` \(masses and lengths falling to 1e-6 of the root's\)")
+    from gimwatch.stress.cases import CASES
+
+    spec = CASES["tapered-30"].spec
+    assert spec.masses_kg[-1] / spec.masses_kg[0] == pytest.approx(1e-6)
+    assert spec.lengths_m[-1] / spec.lengths_m[0] == pytest.approx(1e-6)
+    properties = (ROOT / "tests" / "test_stress_properties.py").read_text()
+    examples = re.search(r"max_examples=(\d+)", properties).group(1)
+    chains = _find(page, r"the O\(n\) diagonal on (\d+) random chains")
+    assert chains.group(1) == examples
+
+
+def test_tighten_figures_are_the_committed_run():
+    rows = _csv("tighten.csv")
+    pairs, ratios = {}, []
+    for case in dict.fromkeys(r["case"] for r in rows):
+        fixed = sorted(
+            (float(r["wall_time_s"]), float(r["error_rad"]))
+            for r in rows
+            if r["case"] == case and r["mode"] == "fixed"
+        )
+        (tight,) = [r for r in rows if r["case"] == case and r["mode"] == "tighten"]
+        times, errors = np.log([f[0] for f in fixed]), np.log([f[1] for f in fixed])
+        same_time = float(np.exp(np.interp(np.log(float(tight["wall_time_s"])), times, errors)))
+        pairs[case] = (float(tight["error_rad"]), same_time)
+        ratios.append(float(tight["error_rad"]) / same_time)
+        assert float(tight["rtol0"]) == 1e-5
+    page = "docs/findings/hard-cases.md"
+    match = _find(page, r"\*\*([\d.]+)–(\d+)× less accurate than a fixed tolerance")
+    assert _numbers(match) == [round(min(ratios), 1), round(max(ratios))]
+    match = _find(
+        page,
+        r"\(straight-20: ([\d.e-]+) rad vs ([\d.e-]+); feather root: ([\d.e-]+) vs ([\d.e-]+);\s+"
+        r"heavy root: ([\d.e-]+) vs ([\d.e-]+)\)",
+    )
+    quoted = [(match.group(i), match.group(i + 1)) for i in (1, 3, 5)]
+    cases = ("straight-20", "feather-root-12", "heavy-root-12")
+    for (tight, fixed), case in zip(quoted, cases, strict=True):
+        assert float(tight) == float(f"{pairs[case][0]:.1e}"), case
+        assert float(fixed) == float(f"{pairs[case][1]:.1e}"), case
+    assert len(pairs) == 3 and "on three hard chains" in " ".join(_text(page).split())
+    match = _find(page, r"`tighten` from rtol ([\d.e-]+) with the threshold")
+    assert float(match.group(1)) == 1e-5
+
+
+def test_claims_figures_are_the_library_and_demo_values():
+    import gimwatch as gw
+
+    demo = test_simulate.PUBLISHED_DEMO
+    claims = "docs/findings/claims.md"
+    worst = max(abs(demo[n]["worst"] - 1) for n in (10, 20))
+    match = _find(claims, r"swinging 10- and 20-link chains is within (\d+) % of 4n⁴")
+    assert int(match.group(1)) == round(100 * worst)
+    forward, backward = [], []
+    for n in (4, 10, 20):
+        robot = gw.load_robot(f"chain:{n}")
+        record = gw.analyze_configuration(robot, gw.neutral_configuration(robot))
+        assert record.diagonal_ratio == pytest.approx(n**3, rel=1e-14)  # "δ = n³ exactly"
+        forward.append(record.pivot_ratio_forward)
+        backward.append(record.pivot_ratio_backward)
+    match = _find(claims, r"grow with κ \(([\d,]+), ([\d,]+), ([\d,]+) for straight n = 4, 10, 20")
+    assert [_figure(x) for x in match.groups()] == [
+        float(f"{x:.4g}") if x > 1e4 else round(x) for x in forward
+    ]
+    match = _find(claims, r"gives ([\d.]+) \(n = 4\) to ([\d.]+) for\s+every straight chain")
+    assert _numbers(match) == [round(min(backward), 3), round(max(backward), 3)]
+    _find(claims, r"δ = n³ exactly for straight")
+    readme = _find("README.md", r"κ/4n⁴ = ([\d.]+) \(n = 4\) …")
+    assert float(readme.group(1)) == round(demo[4]["worst"], 2)
+    serial = _find("README.md", r"\*\*on serial chains\*\*: Pearson\(log δ, log κ\) ≈ ([\d.]+);")
+    assert {round(demo[n]["pearson"], 1) for n in (4, 10, 20)} == {float(serial.group(1))}
+
+
+# --- survey prose -------------------------------------------------------------------------------
+
+SERIAL_ARMS = ("ur3", "ur5", "ur10", "panda", "xarm7", "z1", "bravo7_no_ee", "talos_arm")
+BRANCHED = (
+    "anymal",
+    "anymal_c",
+    "baxter",
+    "human",
+    "icub",
+    "icub_reduced",
+    "simple_humanoid",
+    "simple_humanoid_classical",
+)
+
+
+def test_survey_prose_is_the_committed_survey():
+    from gimwatch.survey.trajectory import TrajectorySettings
+
+    survey = json.loads((BENCH / "survey" / "survey.json").read_text())
+    robots = {r["robot"]: r for r in survey["robots"]}
+    page = "docs/findings/survey.md"
+
+    def runs(key):
+        values = [(r["trajectories"] or {}).get(key) for r in survey["robots"]]
+        return [v for v in values if v is not None]
+
+    budget = sorted(
+        r["robot"]
+        for r in survey["robots"]
+        if any(p["status"] == "step-budget" for p in (r["trajectories"] or {}).get("per_run", []))
+    )
+    match = _find(page, r"(\d+) completed; (\w+) and (\w+)\s+hit the step budget")
+    assert sorted(match.groups()[1:]) == budget
+    match = _find(page, r"r\(log δ, log κ\) ([\d.]+), αδ error median ([\d.]+)\)")
+    assert _numbers(match) == [
+        round(float(np.median(runs("pearson_log_delta_log_kappa_median"))), 2),
+        round(float(np.median(runs("alpha_delta_rel_error_median"))), 3),
+    ]
+    negative = {
+        r["robot"]
+        for r in survey["robots"]
+        if ((r["trajectories"] or {}).get("pearson_log_delta_log_kappa_median") or 0) < 0
+    }
+    _find(page, r"\(anymal_c,\s+icub_reduced, both simple_humanoids: r < 0;")
+    assert negative == {"anymal_c", "icub_reduced", "simple_humanoid", "simple_humanoid_classical"}
+
+    arms = [robots[name] for name in SERIAL_ARMS]
+    pearson = min(r["pearson_log_delta_log_kappa"] for r in arms)
+    match = _find(page, r"Talos arm\): Pearson r\(log δ, log κ\) ≥ ([\d.]+),")
+    assert float(match.group(1)) == np.floor(100 * pearson) / 100
+    assert all(r["extreme_dofs"]["min_diagonal_dof"]["frequency"] == 1.0 for r in arms)
+    shares = [r["lambda_min_on_min_diagonal"] for r in arms]
+    match = _find(page, r"smallest M_ii, in ([\d.]+)–(\d+)% of samples")
+    assert _numbers(match) == [np.floor(1000 * min(shares)) / 10, 100 * max(shares)]
+    errors = [r["alpha_delta_rel_error_median"] for r in arms]
+    match = _find(page, r"αδ is\s+within (\d+)–(\d+)% \(median relative error\)")
+    assert _numbers(match) == [round(100 * min(errors)), round(100 * max(errors))]
+
+    below = {
+        r["robot"]
+        for r in survey["robots"]
+        if r["pearson_log_delta_log_kappa"] is not None and r["pearson_log_delta_log_kappa"] < 0.5
+    }
+    assert below == set(BRANCHED)
+    _find(page, r"r < 0.5 for anymal, anymal_c, baxter, human, icub,\s+icub_reduced and both")
+    lowest = min(robots[n]["pearson_log_delta_log_kappa"] for n in BRANCHED)
+    assert _figure(_find(page, r"\(down to r = (−[\d.]+)\)").group(1)) == round(lowest, 2)
+    shares = [robots[n]["lambda_min_on_min_diagonal"] for n in BRANCHED]
+    match = _find(page, r"smallest-M_ii coordinate in only (\d+)–(\d+)% of samples")
+    assert _numbers(match) == [round(100 * min(shares)), round(100 * max(shares))]
+
+    icub = robots["icub"]
+    match = _find(
+        page, r"icub's is numerically singular \(κ = ([\d.e]+)\),\s+so its αδ is off by ([\d.e]+);"
+    )
+    assert float(match.group(1)) == float(f"{icub['quantiles']['kappa']['max']:.1e}")
+    assert float(match.group(2)) == 10 ** np.floor(np.log10(icub["alpha_delta_rel_error_median"]))
+    kinova = _find(page, r"\(αδ error\s+×(\d+) median\)")
+    assert int(kinova.group(1)) == round(robots["kinova"]["alpha_delta_rel_error_median"])
+    _find(page, r"a finger: PR2, TIAGo\), r is undefined")
+    assert robots["pr2"]["pearson_log_delta_log_kappa"] is None
+    assert robots["tiago"]["pearson_log_delta_log_kappa"] is None
+
+    settings = TrajectorySettings()
+    match = _find(page, r"N short simulated runs \(default (\d+) of (\d+) s\)")
+    assert _numbers(match) == [settings.count, settings.duration_s]
+    match = _find(page, r"c_i = ([\d.]+)/s · M_ii\(q0\)")
+    assert float(match.group(1)) == settings.damping_per_s
+    match = _find(page, r"DOP853 at rtol ([\d.e-]+), or RK4")
+    assert float(match.group(1)) == settings.rtol
+    match = _find(page, r"a stiff run stops after (\d+) steps")
+    assert int(match.group(1)) == settings.max_steps
+    match = _find(page, r"the watch samples κ\s+and δ every ([\d.]+) s")
+    assert float(match.group(1)) == settings.sample_s
+    import inspect
+
+    from gimwatch.survey.run import run_survey
+
+    chunk = inspect.signature(run_survey).parameters["chunk_size"].default
+    assert int(_find(page, r"cut into chunks of (\d+)\)").group(1)) == chunk
+    assert (
+        int(_find(page, r"survey all --samples (\d+) --trajectory").group(1))
+        == (survey["samples_per_robot"])
+    )
