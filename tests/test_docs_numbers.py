@@ -729,3 +729,101 @@ def test_survey_prose_is_the_committed_survey():
         int(_find(page, r"survey all --samples (\d+) --trajectory").group(1))
         == (survey["samples_per_robot"])
     )
+
+
+# --- very long chains ---------------------------------------------------------------------------
+
+
+def test_ten_thousand_links_are_the_committed_run():
+    run = json.loads((BENCH / "straight_10000" / "kappa.json").read_text())
+    assert run["n"] == 10_000
+    lanczos = run["lanczos"]
+    assert lanczos["kappa_over_4n4"] == pytest.approx(lanczos["kappa"] / (4 * 10_000**4))
+    # the committed run, the test constant and the pages agree
+    assert round(lanczos["kappa_over_4n4"], 3) == test_longchain.PUBLISHED_KAPPA_OVER_4N4[10_000]
+    assert float(_find("README.md", r"… ([\d.]+) \(n = 10,000\)").group(1)) == round(
+        lanczos["kappa_over_4n4"], 2
+    )
+    page = "docs/findings/long-chains.md"
+    match = _find(
+        page, r"restarted ARPACK needs ([\d,]+) products at n = 10⁴ and\s+plain Lanczos ([\d,]+)"
+    )
+    arpack, plain = (_figure(x) for x in match.groups())
+    assert arpack == round(run["arpack"]["products"], -3)
+    assert plain == lanczos["products"]
+    assert run["arpack"]["kappa"] == pytest.approx(lanczos["kappa"], rel=1e-6)
+
+
+def test_long_chain_prose_is_the_committed_runs():
+    from gimwatch.denoc import DenocModel
+    from gimwatch.model.chains import chain_spec
+
+    page = "docs/findings/long-chains.md"
+    kappa = {(int(r["n"]), r["route"]): r for r in _csv("longchain_kappa.csv")}
+    dense, free = kappa[(4000, "dense_eigvalsh")], kappa[(4000, "matrix_free_lanczos")]
+    match = _find(
+        page,
+        r"At\s+n = 4,000 the dense route gives κ/4n⁴ = ([\d.]+) and λmin = ([\d.]+), the "
+        r"matrix-free route ([\d.]+)\s+and ([\d.]+) — the value every n from 500 up converges "
+        r"to — in ([\d.]+) s instead of ([\d.]+) s",
+    )
+    assert _numbers(match) == [
+        round(float(dense["kappa_over_4n4"]), 3),
+        round(float(dense["lambda_min"]), 4),
+        round(float(free["kappa_over_4n4"]), 3),
+        round(float(free["lambda_min"]), 4),
+        round(float(free["seconds"]), 1),
+        round(float(dense["seconds"]), 1),
+    ]
+    converged = {
+        round(float(r["lambda_min"]), 4)
+        for (n, route), r in kappa.items()
+        if n >= 500 and route == "matrix_free_lanczos"
+    }
+    assert converged == {round(float(free["lambda_min"]), 4)}
+    eps = np.finfo(float).eps
+    match = _find(page, r"\(κ·eps = ([\d.]+) at n ≈ ([\d,]+)\)")
+    level, n = float(match.group(1)), _figure(match.group(2))
+    assert n == float(f"{(level / (4 * eps)) ** 0.25:.2g}")
+
+    ratios = [test_simulate.PUBLISHED_DEMO[n]["worst"] for n in (4, 10, 20)]
+    ratios += [float(r["kappa_over_4n4"]) for r in kappa.values()]
+    ratios.append(
+        json.loads((BENCH / "straight_10000" / "kappa.json").read_text())["lanczos"][
+            "kappa_over_4n4"
+        ]
+    )
+    match = _find(page, r"\(κ/n⁴ ∈\s+\[([\d.]+), ([\d.]+)\]\)")
+    assert _numbers(match) == [np.floor(40 * min(ratios)) / 10, np.ceil(40 * max(ratios)) / 10]
+
+    errors = []
+    for n in (100, 1_000, 10_000, 100_000):
+        diagonal = DenocModel.from_chain(chain_spec(n)).state(np.zeros(n)).diagonal()
+        errors.append(abs(diagonal.max() / diagonal.min() / n**3 - 1))
+    match = _find(page, r"δ = n³ to ([\d.e-]+)\. Forward dynamics")
+    assert float(match.group(1)) == _one_digit_up(max(errors)), errors
+
+
+def test_pinocchio_data_memory_is_the_committed_measurement():
+    rows = _csv("pinocchio_data/memory.csv")
+    largest = max(rows, key=lambda r: int(r["n"]))
+    n, peak = int(largest["n"]), int(largest["peak_bytes"])
+    # n³ growth: the per-n³ bytes of the two largest sizes within 10 %
+    per_cube = [int(r["peak_bytes"]) / int(r["n"]) ** 3 for r in rows[-2:]]
+    assert per_cube[0] == pytest.approx(per_cube[1], rel=0.1)
+    page = "docs/findings/long-chains.md"
+    match = _find(
+        page,
+        r"building one peaks at\s+([\d.]+) GB at n = (\d+), so ≈ ([\d.]+) GB at n = 300 and "
+        r"(\d+) GB at 500",
+    )
+    assert _numbers(match) == [
+        round(peak / 1e9, 1),
+        n,
+        round(peak * (300 / n) ** 3 / 1e9, 1),
+        round(peak * (500 / n) ** 3 / 1e9),
+    ]
+    hard = _find(
+        "docs/findings/hard-cases.md", r"At nv = 500 Pinocchio's Data would need ~(\d+) GB"
+    )
+    assert int(hard.group(1)) == round(peak * (500 / n) ** 3 / 1e9)
