@@ -827,3 +827,76 @@ def test_pinocchio_data_memory_is_the_committed_measurement():
         "docs/findings/hard-cases.md", r"At nv = 500 Pinocchio's Data would need ~(\d+) GB"
     )
     assert int(hard.group(1)) == round(peak * (500 / n) ** 3 / 1e9)
+
+
+# --- guide pages --------------------------------------------------------------------------------
+
+
+def test_crosscheck_prose_is_the_committed_runs():
+    runs = [
+        r
+        for base in ("fixed", "floating")
+        for r in json.loads((BENCH / "crosscheck" / f"{base}.json").read_text())
+    ]
+    page = "docs/guide/crosscheck.md"
+    match = _find(page, r"over every example-robot-data robot \((\d+) states each")
+    assert {r["samples"] for r in runs} == {int(match.group(1))}
+    icub = [r for r in runs if r["robot"] == "icub"]
+    match = _find(
+        page,
+        r"icub's eyes and neck give κ up to ([\d.e]+) in these runs, where both implementations' "
+        r"q̈\s+agree only to ([\d.e-]+) while their backward errors stay below ([\d.e-]+)\.",
+    )
+    kappa, forward, backward = _numbers(match)
+    assert kappa == float(f"{max(r['kappa_max'] for r in icub):.0e}")
+    assert forward == float(f"{max(r['qdd_rel_err'] for r in icub):.0e}")
+    assert max(r["qdd_backward_err"] for r in icub) < backward
+    assert max(r["qdd_backward_err"] for r in icub) > backward / 100
+    rows = {(int(r["n"]), r["quantity"]): float(r["ratio"]) for r in _csv("denoc.csv")}
+    match = _find(
+        page,
+        r"forward dynamics costs (\d+)× Pinocchio's ABA at n = 10 \(call overhead\),\s+"
+        r"([\d.]+)× at 100 and ([\d.]+)× at 500; the dense GIM, built by the per-depth NumPy "
+        r"recursions of\s+Eqs. 11–13, costs (\d+)–(\d+)× CRBA",
+    )
+    gim = [rows[(n, "gim")] for n in (10, 100, 500)]
+    assert _numbers(match) == [
+        round(rows[(10, "forward_dynamics")]),
+        round(rows[(100, "forward_dynamics")], 1),
+        round(rows[(500, "forward_dynamics")], 1),
+        round(min(gim)),
+        float(f"{max(gim):.0e}"),
+    ]
+
+
+def test_simulate_prose_is_the_demo_and_bench_settings():
+    from gimwatch.bench.watch_section import DT_S, STEPS_PER_SAMPLE
+    from gimwatch.demo import paper_chain_table
+
+    page = "docs/guide/simulate.md"
+    demo = paper_chain_table(4)
+    match = _find(page, r"Measured \(`gimwatch demo`, DOP853 at ([\d.e-]+), (\d+) s\)")
+    assert demo["integrator"] == {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10}
+    assert _numbers(match) == [demo["integrator"]["rtol"], demo["duration"]]
+    over = _find(page, r"overestimates κ by up to ~(\d+)× for the 4-link chain")
+    assert int(over.group(1)) == round(1 + test_simulate.PUBLISHED_DEMO[4]["max"])
+    watch = _find(page, r"RK4, a sample every\s+(\d+) steps, (\d+) links\)")
+    sizes = {int(r["n"]) for r in _csv("watch.csv")}
+    assert _numbers(watch) == [STEPS_PER_SAMPLE, max(sizes)]
+    assert DT_S == 1e-3
+
+
+def test_rod_chain_defaults_are_the_generator_defaults():
+    import inspect
+
+    from gimwatch.model.chains import chain_spec
+
+    defaults = inspect.signature(chain_spec).parameters
+    mass, length = defaults["mass_kg"].default, defaults["length_m"].default
+    for page, pattern in (
+        ("docs/getting-started.md", r"chain of N slender\s+rods of ([\d.]+) kg and ([\d.]+) m\)"),
+        ("docs/guide/analyze.md", r"chain of N slender rods, ([\d.]+) kg, ([\d.]+) m\)"),
+        ("docs/guide/cli.md", r"chain of N slender rods, ([\d.]+) kg, ([\d.]+) m\)"),
+        ("docs/findings/accuracy-costs.md", r"Paper chain \(([\d.]+) kg, ([\d.]+) m rods\)"),
+    ):
+        assert _numbers(_find(page, pattern)) == [mass, length], page
