@@ -900,3 +900,163 @@ def test_rod_chain_defaults_are_the_generator_defaults():
         ("docs/findings/accuracy-costs.md", r"Paper chain \(([\d.]+) kg, ([\d.]+) m rods\)"),
     ):
         assert _numbers(_find(page, pattern)) == [mass, length], page
+
+
+# --- notebooks' prose ---------------------------------------------------------------------------
+
+
+def _notebook(name: str) -> tuple[str, str]:
+    """(markdown, code) of ``notebooks/<name>``, each cell kind joined."""
+    cells = json.loads((ROOT / "notebooks" / name).read_text())["cells"]
+
+    def joined(kind):
+        return "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == kind)
+
+    return joined("markdown"), joined("code")
+
+
+def test_notebook_prose_states_what_the_code_runs():
+    markdown, code = _notebook("chain_lengths.ipynb")
+    lengths = tuple(int(x) for x in re.search(r"LENGTHS = \(([\d, ]+)\)", code).group(1).split(","))
+    stated = re.search(r"for n = (\d+), (\d+), (\d+) and (\d+) links", markdown)
+    assert tuple(int(x) for x in stated.groups()) == lengths
+    readme = _find("notebooks/README.md", r"swinging chain for n = (\d+), (\d+), (\d+), (\d+):")
+    assert tuple(int(x) for x in readme.groups()) == lengths
+    duration = float(re.search(r"duration_s=([\d.]+)", code).group(1))
+    assert float(re.search(r"runs are short \((\d+) s\)", markdown).group(1)) == duration
+
+    markdown, code = _notebook("denoc_vs_crba.ipynb")
+    samples = {int(x) for x in re.findall(r"samples=(\d+)", code)}
+    assert {int(re.search(r"over (\d+) seeded random states", markdown).group(1))} == samples
+    assert 'load_robot("chain:4")' in code and "paper's 4-link chain" in markdown
+
+    markdown, code = _notebook("urdf_robots.ipynb")
+    masses = re.search(r"chain_spec\((\d+), mass_kg=\[([\d., ]+)\]", code)
+    assert int(re.search(r"a (\d+)-link spatial chain", markdown).group(1)) == int(masses.group(1))
+    assert len(masses.group(2).split(",")) == int(masses.group(1))
+
+
+# --- the bench block's tables against the committed CSV files -----------------------------------
+
+
+def _block_table(heading: str) -> list[dict[str, str]]:
+    """The first Markdown table under ``## heading`` in the bench block, as header → cell."""
+    block = _text("docs/findings/accuracy-costs.md").split("<!-- bench:start -->")[1]
+    section = block.split(f"## {heading}\n", 1)[1].split("\n## ", 1)[0]
+    lines = [line for line in section.splitlines() if line.startswith("|")]
+    header = [c.strip() for c in lines[0].strip("|").split("|")]
+    assert set(lines[1]) <= {"|", "-", ":"}, heading
+    return [
+        dict(zip(header, (c.strip() for c in line.strip("|").split("|")), strict=True))
+        for line in lines[2:]
+    ]
+
+
+def _g3(value: str | float) -> str:
+    return f"{float(value):.3g}"
+
+
+def test_bench_block_tables_are_the_committed_csv_files():
+    summary = json.loads((BENCH / "summary.json").read_text())["sections"]
+    cost = {(r["n"], r["method"]): r for r in _csv("conditioning.csv")}
+    table = _block_table("Conditioning cost vs n")
+    assert [row["n"] for row in table] == sorted({n for n, _ in cost}, key=int)
+    for row in table:
+        for header, value in row.items():
+            if header.endswith("(µs)"):
+                method = header.removesuffix(" (µs)")
+                assert value == _g3(1e6 * float(cost[(row["n"], method)]["median_s"])), header
+        speedup = summary["conditioning"]["speedup_delta_on_vs_kappa_eig"][row["n"]]
+        assert row["κ-eig / δ-O(n)"] == _g3(speedup)
+
+    estimators = {e["estimator"]: e for e in summary["estimators"]["by_estimator"]}
+    keys = ("median_rel_error", "max_rel_error", "min_ratio", "max_ratio", "cost_vs_kappa")
+    for row in _block_table("Estimator quality vs cost"):
+        cells = list(row.values())
+        assert cells[1:] == [_g3(estimators[cells[0]][k]) for k in keys], cells[0]
+
+    accuracy = {(r["family"], r["n"], r["method"]): r for r in _csv("accuracy.csv")}
+    table = _block_table("Forward-dynamics accuracy vs κ")
+    assert len(table) == len({k[:2] for k in accuracy})
+    for row in table:
+        key = (row["chain"], row["n"])
+        first = accuracy[(*key, "aba")]
+        assert [row["κ"], row["κ·eps"]] == [_g3(first["kappa"]), _g3(first["kappa_eps"])]
+        for method in ("aba", "crba_pin_cholesky", "crba_cho_solve", "numpy_solve", "denoc"):
+            assert row[method] == _g3(accuracy[(*key, method)]["rel_error"]), (key, method)
+
+    dynamics = {(r["n"], r["backend"]): r for r in _csv("dynamics.csv")}
+    table = _block_table("Dynamics backends per step")
+    assert len(table) == len(dynamics)
+    for row in table:
+        source = dynamics[(row["n"], row["backend"])]
+        assert [row["FD call (µs)"], row["/ aba"], row["note"]] == [
+            _g3(source["call_us"]),
+            _g3(source["vs_aba"]),
+            source["note"],
+        ]
+
+    watch = {r["watch"]: r for r in _csv("watch.csv") if r["n"] == "20"}
+    columns = {
+        "step (µs)": "step_us",
+        "run overhead": "run_overhead",
+        "one sample (µs)": "sample_us",
+        "sample / bare step": "sample_vs_step",
+        "amortized (1 per 10 steps)": "amortized",
+        "sample / aba call": "sample_vs_aba_call",
+    }
+    table = _block_table("Cost of the watch per step")
+    assert [row["watch"] for row in table] == list(watch)
+    for row in table:
+        for header, key in columns.items():
+            assert row[header] == _g3(watch[row["watch"]][key]), (row["watch"], header)
+
+    denoc = {(r["n"], r["quantity"]): r for r in _csv("denoc.csv")}
+    table = _block_table("DeNOC vs Pinocchio cost")
+    assert len(table) == len(denoc)
+    for row in table:
+        source = denoc[(row["n"], row["quantity"])]
+        assert [row["DeNOC (µs)"], row["Pinocchio (µs)"], row["DeNOC / Pinocchio"]] == [
+            _g3(source["denoc_us"]),
+            _g3(source["pinocchio_us"]),
+            _g3(source["ratio"]),
+        ]
+
+    analyze = _csv("longchain_analyze.csv")
+    table = _block_table("Very long chains on the O(n) path")
+    assert [[r["n"], r["metrics"], r["wall (s)"], r["peak RSS (MB)"]] for r in table] == [
+        [r["n"], r["metrics"], _g3(r["wall_s"]), _g3(r["peak_rss_mb"])] for r in analyze
+    ]
+
+
+def test_bench_block_sentences_are_the_committed_summary():
+    summary = json.loads((BENCH / "summary.json").read_text())["sections"]
+    page = "docs/findings/accuracy-costs.md"
+    accuracy = summary["accuracy"]
+    match = _find(page, r"median and worst over all chains: `denoc` ([\d.e-]+) / ([\d.e-]+);")
+    assert list(match.groups()) == [
+        f"{accuracy['median_error_over_kappa_eps']['denoc']:.2g}",
+        f"{accuracy['worst_error_over_kappa_eps']['denoc']:.2g}",
+    ]
+    acceptance = summary["integrators"]["acceptance"]
+    match = _find(
+        page,
+        r"gimwatch ([\d.]+) s, MuJoCo RK4 ([\d.]+) s, ratio ([\d.]+) \(first measured run at or "
+        r"below it: ([\d.]+) s vs ([\d.]+) s, ratio ([\d.]+)\)",
+    )
+    assert list(match.groups()) == [
+        f"{acceptance[k]:.3g}"
+        for k in (
+            "gimwatch_dop853_interpolated_s",
+            "mujoco_rk4_interpolated_s",
+            "ratio_interpolated",
+            "gimwatch_dop853_measured_s",
+            "mujoco_rk4_measured_s",
+            "ratio_measured",
+        )
+    ]
+    watch = summary["watch"]
+    match = _find(page, r"= ([\d.]+)% of a bare RK4 \+ ABA step \(([\d.]+) µs\)")
+    assert float(match.group(1)) == round(100 * watch["delta_sample_vs_step"], 1)
+    match = _find(page, r"watching δ costs under (\d+)% of a bare ABA step")
+    assert int(match.group(1)) == round(100 * watch["delta_target"])
