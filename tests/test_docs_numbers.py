@@ -729,3 +729,334 @@ def test_survey_prose_is_the_committed_survey():
         int(_find(page, r"survey all --samples (\d+) --trajectory").group(1))
         == (survey["samples_per_robot"])
     )
+
+
+# --- very long chains ---------------------------------------------------------------------------
+
+
+def test_ten_thousand_links_are_the_committed_run():
+    run = json.loads((BENCH / "straight_10000" / "kappa.json").read_text())
+    assert run["n"] == 10_000
+    lanczos = run["lanczos"]
+    assert lanczos["kappa_over_4n4"] == pytest.approx(lanczos["kappa"] / (4 * 10_000**4))
+    # the committed run, the test constant and the pages agree
+    assert round(lanczos["kappa_over_4n4"], 3) == test_longchain.PUBLISHED_KAPPA_OVER_4N4[10_000]
+    assert float(_find("README.md", r"… ([\d.]+) \(n = 10,000\)").group(1)) == round(
+        lanczos["kappa_over_4n4"], 2
+    )
+    page = "docs/findings/long-chains.md"
+    match = _find(
+        page, r"restarted ARPACK needs ([\d,]+) products at n = 10⁴ and\s+plain Lanczos ([\d,]+)"
+    )
+    arpack, plain = (_figure(x) for x in match.groups())
+    assert arpack == round(run["arpack"]["products"], -3)
+    assert plain == lanczos["products"]
+    assert run["arpack"]["kappa"] == pytest.approx(lanczos["kappa"], rel=1e-6)
+
+
+def test_long_chain_prose_is_the_committed_runs():
+    from gimwatch.denoc import DenocModel
+    from gimwatch.model.chains import chain_spec
+
+    page = "docs/findings/long-chains.md"
+    kappa = {(int(r["n"]), r["route"]): r for r in _csv("longchain_kappa.csv")}
+    dense, free = kappa[(4000, "dense_eigvalsh")], kappa[(4000, "matrix_free_lanczos")]
+    match = _find(
+        page,
+        r"At\s+n = 4,000 the dense route gives κ/4n⁴ = ([\d.]+) and λmin = ([\d.]+), the "
+        r"matrix-free route ([\d.]+)\s+and ([\d.]+) — the value every n from 500 up converges "
+        r"to — in ([\d.]+) s instead of ([\d.]+) s",
+    )
+    assert _numbers(match) == [
+        round(float(dense["kappa_over_4n4"]), 3),
+        round(float(dense["lambda_min"]), 4),
+        round(float(free["kappa_over_4n4"]), 3),
+        round(float(free["lambda_min"]), 4),
+        round(float(free["seconds"]), 1),
+        round(float(dense["seconds"]), 1),
+    ]
+    converged = {
+        round(float(r["lambda_min"]), 4)
+        for (n, route), r in kappa.items()
+        if n >= 500 and route == "matrix_free_lanczos"
+    }
+    assert converged == {round(float(free["lambda_min"]), 4)}
+    eps = np.finfo(float).eps
+    match = _find(page, r"\(κ·eps = ([\d.]+) at n ≈ ([\d,]+)\)")
+    level, n = float(match.group(1)), _figure(match.group(2))
+    assert n == float(f"{(level / (4 * eps)) ** 0.25:.2g}")
+
+    ratios = [test_simulate.PUBLISHED_DEMO[n]["worst"] for n in (4, 10, 20)]
+    ratios += [float(r["kappa_over_4n4"]) for r in kappa.values()]
+    ratios.append(
+        json.loads((BENCH / "straight_10000" / "kappa.json").read_text())["lanczos"][
+            "kappa_over_4n4"
+        ]
+    )
+    match = _find(page, r"\(κ/n⁴ ∈\s+\[([\d.]+), ([\d.]+)\]\)")
+    assert _numbers(match) == [np.floor(40 * min(ratios)) / 10, np.ceil(40 * max(ratios)) / 10]
+
+    errors = []
+    for n in (100, 1_000, 10_000, 100_000):
+        diagonal = DenocModel.from_chain(chain_spec(n)).state(np.zeros(n)).diagonal()
+        errors.append(abs(diagonal.max() / diagonal.min() / n**3 - 1))
+    match = _find(page, r"δ = n³ to ([\d.e-]+)\. Forward dynamics")
+    assert float(match.group(1)) == _one_digit_up(max(errors)), errors
+
+
+def test_pinocchio_data_memory_is_the_committed_measurement():
+    rows = _csv("pinocchio_data/memory.csv")
+    largest = max(rows, key=lambda r: int(r["n"]))
+    n, peak = int(largest["n"]), int(largest["peak_bytes"])
+    # n³ growth: the per-n³ bytes of the two largest sizes within 10 %
+    per_cube = [int(r["peak_bytes"]) / int(r["n"]) ** 3 for r in rows[-2:]]
+    assert per_cube[0] == pytest.approx(per_cube[1], rel=0.1)
+    page = "docs/findings/long-chains.md"
+    match = _find(
+        page,
+        r"building one peaks at\s+([\d.]+) GB at n = (\d+), so ≈ ([\d.]+) GB at n = 300 and "
+        r"(\d+) GB at 500",
+    )
+    assert _numbers(match) == [
+        round(peak / 1e9, 1),
+        n,
+        round(peak * (300 / n) ** 3 / 1e9, 1),
+        round(peak * (500 / n) ** 3 / 1e9),
+    ]
+    hard = _find(
+        "docs/findings/hard-cases.md", r"At nv = 500 Pinocchio's Data would need ~(\d+) GB"
+    )
+    assert int(hard.group(1)) == round(peak * (500 / n) ** 3 / 1e9)
+
+
+# --- guide pages --------------------------------------------------------------------------------
+
+
+def test_crosscheck_prose_is_the_committed_runs():
+    runs = [
+        r
+        for base in ("fixed", "floating")
+        for r in json.loads((BENCH / "crosscheck" / f"{base}.json").read_text())
+    ]
+    page = "docs/guide/crosscheck.md"
+    match = _find(page, r"over every example-robot-data robot \((\d+) states each")
+    assert {r["samples"] for r in runs} == {int(match.group(1))}
+    icub = [r for r in runs if r["robot"] == "icub"]
+    match = _find(
+        page,
+        r"icub's eyes and neck give κ up to ([\d.e]+) in these runs, where both implementations' "
+        r"q̈\s+agree only to ([\d.e-]+) while their backward errors stay below ([\d.e-]+)\.",
+    )
+    kappa, forward, backward = _numbers(match)
+    assert kappa == float(f"{max(r['kappa_max'] for r in icub):.0e}")
+    assert forward == float(f"{max(r['qdd_rel_err'] for r in icub):.0e}")
+    assert max(r["qdd_backward_err"] for r in icub) < backward
+    assert max(r["qdd_backward_err"] for r in icub) > backward / 100
+    rows = {(int(r["n"]), r["quantity"]): float(r["ratio"]) for r in _csv("denoc.csv")}
+    match = _find(
+        page,
+        r"forward dynamics costs (\d+)× Pinocchio's ABA at n = 10 \(call overhead\),\s+"
+        r"([\d.]+)× at 100 and ([\d.]+)× at 500; the dense GIM, built by the per-depth NumPy "
+        r"recursions of\s+Eqs. 11–13, costs (\d+)–(\d+)× CRBA",
+    )
+    gim = [rows[(n, "gim")] for n in (10, 100, 500)]
+    assert _numbers(match) == [
+        round(rows[(10, "forward_dynamics")]),
+        round(rows[(100, "forward_dynamics")], 1),
+        round(rows[(500, "forward_dynamics")], 1),
+        round(min(gim)),
+        float(f"{max(gim):.0e}"),
+    ]
+
+
+def test_simulate_prose_is_the_demo_and_bench_settings():
+    from gimwatch.bench.watch_section import DT_S, STEPS_PER_SAMPLE
+    from gimwatch.demo import paper_chain_table
+
+    page = "docs/guide/simulate.md"
+    demo = paper_chain_table(4)
+    match = _find(page, r"Measured \(`gimwatch demo`, DOP853 at ([\d.e-]+), (\d+) s\)")
+    assert demo["integrator"] == {"method": "DOP853", "rtol": 1e-10, "atol": 1e-10}
+    assert _numbers(match) == [demo["integrator"]["rtol"], demo["duration"]]
+    over = _find(page, r"overestimates κ by up to ~(\d+)× for the 4-link chain")
+    assert int(over.group(1)) == round(1 + test_simulate.PUBLISHED_DEMO[4]["max"])
+    watch = _find(page, r"RK4, a sample every\s+(\d+) steps, (\d+) links\)")
+    sizes = {int(r["n"]) for r in _csv("watch.csv")}
+    assert _numbers(watch) == [STEPS_PER_SAMPLE, max(sizes)]
+    assert DT_S == 1e-3
+
+
+def test_rod_chain_defaults_are_the_generator_defaults():
+    import inspect
+
+    from gimwatch.model.chains import chain_spec
+
+    defaults = inspect.signature(chain_spec).parameters
+    mass, length = defaults["mass_kg"].default, defaults["length_m"].default
+    for page, pattern in (
+        ("docs/getting-started.md", r"chain of N slender\s+rods of ([\d.]+) kg and ([\d.]+) m\)"),
+        ("docs/guide/analyze.md", r"chain of N slender rods, ([\d.]+) kg, ([\d.]+) m\)"),
+        ("docs/guide/cli.md", r"chain of N slender rods, ([\d.]+) kg, ([\d.]+) m\)"),
+        ("docs/findings/accuracy-costs.md", r"Paper chain \(([\d.]+) kg, ([\d.]+) m rods\)"),
+    ):
+        assert _numbers(_find(page, pattern)) == [mass, length], page
+
+
+# --- notebooks' prose ---------------------------------------------------------------------------
+
+
+def _notebook(name: str) -> tuple[str, str]:
+    """(markdown, code) of ``notebooks/<name>``, each cell kind joined."""
+    cells = json.loads((ROOT / "notebooks" / name).read_text())["cells"]
+
+    def joined(kind):
+        return "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == kind)
+
+    return joined("markdown"), joined("code")
+
+
+def test_notebook_prose_states_what_the_code_runs():
+    markdown, code = _notebook("chain_lengths.ipynb")
+    lengths = tuple(int(x) for x in re.search(r"LENGTHS = \(([\d, ]+)\)", code).group(1).split(","))
+    stated = re.search(r"for n = (\d+), (\d+), (\d+) and (\d+) links", markdown)
+    assert tuple(int(x) for x in stated.groups()) == lengths
+    readme = _find("notebooks/README.md", r"swinging chain for n = (\d+), (\d+), (\d+), (\d+):")
+    assert tuple(int(x) for x in readme.groups()) == lengths
+    duration = float(re.search(r"duration_s=([\d.]+)", code).group(1))
+    assert float(re.search(r"runs are short \((\d+) s\)", markdown).group(1)) == duration
+
+    markdown, code = _notebook("denoc_vs_crba.ipynb")
+    samples = {int(x) for x in re.findall(r"samples=(\d+)", code)}
+    assert {int(re.search(r"over (\d+) seeded random states", markdown).group(1))} == samples
+    assert 'load_robot("chain:4")' in code and "paper's 4-link chain" in markdown
+
+    markdown, code = _notebook("urdf_robots.ipynb")
+    masses = re.search(r"chain_spec\((\d+), mass_kg=\[([\d., ]+)\]", code)
+    assert int(re.search(r"a (\d+)-link spatial chain", markdown).group(1)) == int(masses.group(1))
+    assert len(masses.group(2).split(",")) == int(masses.group(1))
+
+
+# --- the bench block's tables against the committed CSV files -----------------------------------
+
+
+def _block_table(heading: str) -> list[dict[str, str]]:
+    """The first Markdown table under ``## heading`` in the bench block, as header → cell."""
+    block = _text("docs/findings/accuracy-costs.md").split("<!-- bench:start -->")[1]
+    section = block.split(f"## {heading}\n", 1)[1].split("\n## ", 1)[0]
+    lines = [line for line in section.splitlines() if line.startswith("|")]
+    header = [c.strip() for c in lines[0].strip("|").split("|")]
+    assert set(lines[1]) <= {"|", "-", ":"}, heading
+    return [
+        dict(zip(header, (c.strip() for c in line.strip("|").split("|")), strict=True))
+        for line in lines[2:]
+    ]
+
+
+def _g3(value: str | float) -> str:
+    return f"{float(value):.3g}"
+
+
+def test_bench_block_tables_are_the_committed_csv_files():
+    summary = json.loads((BENCH / "summary.json").read_text())["sections"]
+    cost = {(r["n"], r["method"]): r for r in _csv("conditioning.csv")}
+    table = _block_table("Conditioning cost vs n")
+    assert [row["n"] for row in table] == sorted({n for n, _ in cost}, key=int)
+    for row in table:
+        for header, value in row.items():
+            if header.endswith("(µs)"):
+                method = header.removesuffix(" (µs)")
+                assert value == _g3(1e6 * float(cost[(row["n"], method)]["median_s"])), header
+        speedup = summary["conditioning"]["speedup_delta_on_vs_kappa_eig"][row["n"]]
+        assert row["κ-eig / δ-O(n)"] == _g3(speedup)
+
+    estimators = {e["estimator"]: e for e in summary["estimators"]["by_estimator"]}
+    keys = ("median_rel_error", "max_rel_error", "min_ratio", "max_ratio", "cost_vs_kappa")
+    for row in _block_table("Estimator quality vs cost"):
+        cells = list(row.values())
+        assert cells[1:] == [_g3(estimators[cells[0]][k]) for k in keys], cells[0]
+
+    accuracy = {(r["family"], r["n"], r["method"]): r for r in _csv("accuracy.csv")}
+    table = _block_table("Forward-dynamics accuracy vs κ")
+    assert len(table) == len({k[:2] for k in accuracy})
+    for row in table:
+        key = (row["chain"], row["n"])
+        first = accuracy[(*key, "aba")]
+        assert [row["κ"], row["κ·eps"]] == [_g3(first["kappa"]), _g3(first["kappa_eps"])]
+        for method in ("aba", "crba_pin_cholesky", "crba_cho_solve", "numpy_solve", "denoc"):
+            assert row[method] == _g3(accuracy[(*key, method)]["rel_error"]), (key, method)
+
+    dynamics = {(r["n"], r["backend"]): r for r in _csv("dynamics.csv")}
+    table = _block_table("Dynamics backends per step")
+    assert len(table) == len(dynamics)
+    for row in table:
+        source = dynamics[(row["n"], row["backend"])]
+        assert [row["FD call (µs)"], row["/ aba"], row["note"]] == [
+            _g3(source["call_us"]),
+            _g3(source["vs_aba"]),
+            source["note"],
+        ]
+
+    watch = {r["watch"]: r for r in _csv("watch.csv") if r["n"] == "20"}
+    columns = {
+        "step (µs)": "step_us",
+        "run overhead": "run_overhead",
+        "one sample (µs)": "sample_us",
+        "sample / bare step": "sample_vs_step",
+        "amortized (1 per 10 steps)": "amortized",
+        "sample / aba call": "sample_vs_aba_call",
+    }
+    table = _block_table("Cost of the watch per step")
+    assert [row["watch"] for row in table] == list(watch)
+    for row in table:
+        for header, key in columns.items():
+            assert row[header] == _g3(watch[row["watch"]][key]), (row["watch"], header)
+
+    denoc = {(r["n"], r["quantity"]): r for r in _csv("denoc.csv")}
+    table = _block_table("DeNOC vs Pinocchio cost")
+    assert len(table) == len(denoc)
+    for row in table:
+        source = denoc[(row["n"], row["quantity"])]
+        assert [row["DeNOC (µs)"], row["Pinocchio (µs)"], row["DeNOC / Pinocchio"]] == [
+            _g3(source["denoc_us"]),
+            _g3(source["pinocchio_us"]),
+            _g3(source["ratio"]),
+        ]
+
+    analyze = _csv("longchain_analyze.csv")
+    table = _block_table("Very long chains on the O(n) path")
+    assert [[r["n"], r["metrics"], r["wall (s)"], r["peak RSS (MB)"]] for r in table] == [
+        [r["n"], r["metrics"], _g3(r["wall_s"]), _g3(r["peak_rss_mb"])] for r in analyze
+    ]
+
+
+def test_bench_block_sentences_are_the_committed_summary():
+    summary = json.loads((BENCH / "summary.json").read_text())["sections"]
+    page = "docs/findings/accuracy-costs.md"
+    accuracy = summary["accuracy"]
+    match = _find(page, r"median and worst over all chains: `denoc` ([\d.e-]+) / ([\d.e-]+);")
+    assert list(match.groups()) == [
+        f"{accuracy['median_error_over_kappa_eps']['denoc']:.2g}",
+        f"{accuracy['worst_error_over_kappa_eps']['denoc']:.2g}",
+    ]
+    acceptance = summary["integrators"]["acceptance"]
+    match = _find(
+        page,
+        r"gimwatch ([\d.]+) s, MuJoCo RK4 ([\d.]+) s, ratio ([\d.]+) \(first measured run at or "
+        r"below it: ([\d.]+) s vs ([\d.]+) s, ratio ([\d.]+)\)",
+    )
+    assert list(match.groups()) == [
+        f"{acceptance[k]:.3g}"
+        for k in (
+            "gimwatch_dop853_interpolated_s",
+            "mujoco_rk4_interpolated_s",
+            "ratio_interpolated",
+            "gimwatch_dop853_measured_s",
+            "mujoco_rk4_measured_s",
+            "ratio_measured",
+        )
+    ]
+    watch = summary["watch"]
+    match = _find(page, r"= ([\d.]+)% of a bare RK4 \+ ABA step \(([\d.]+) µs\)")
+    assert float(match.group(1)) == round(100 * watch["delta_sample_vs_step"], 1)
+    match = _find(page, r"watching δ costs under (\d+)% of a bare ABA step")
+    assert int(match.group(1)) == round(100 * watch["delta_target"])
