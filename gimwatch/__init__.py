@@ -16,6 +16,7 @@ from gimwatch._version import __version__
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports
     from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
     from gimwatch.denoc import DenocModel
+    from gimwatch.denoc.linear import MatrixFreeKappa
     from gimwatch.errors import (
         BackendWarning,
         ConditioningError,
@@ -45,7 +46,6 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     )
     from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
     from gimwatch.metrics.matrix_free import (
-        MatrixFreeKappa,
         gim_inverse_operator,
         gim_operator,
         kappa_matrix_free,
@@ -82,7 +82,7 @@ _EXPORTS: dict[str, str] = {
     "GimwatchWarning": "gimwatch.errors",
     "IllConditionedWarning": "gimwatch.errors",
     "InputError": "gimwatch.errors",
-    "MatrixFreeKappa": "gimwatch.metrics.matrix_free",
+    "MatrixFreeKappa": "gimwatch.denoc.linear",
     "OutputError": "gimwatch.errors",
     "PlanarChainReference": "gimwatch.stress.reference_planar",
     "Robot": "gimwatch.model.robots",
