@@ -45,12 +45,13 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
         udut_pivots,
     )
     from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
+    from gimwatch.metrics.estimator_quality import estimator_quality
     from gimwatch.metrics.matrix_free import (
         gim_inverse_operator,
         gim_operator,
         kappa_matrix_free,
     )
-    from gimwatch.metrics.watch import Watch, estimator_quality
+    from gimwatch.metrics.watch import Watch
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
@@ -109,7 +110,7 @@ _EXPORTS: dict[str, str] = {
     "crosscheck_robot": "gimwatch.crosscheck",
     "diagonal_ratio": "gimwatch.metrics.conditioning",
     "eigenvalues": "gimwatch.metrics.conditioning",
-    "estimator_quality": "gimwatch.metrics.watch",
+    "estimator_quality": "gimwatch.metrics.estimator_quality",
     "example_robot_names": "gimwatch.model.robots",
     "generate_chain_urdf": "gimwatch.model.chains",
     "gim": "gimwatch.model.inertia",
