@@ -134,6 +134,9 @@ class MujocoSource:
         InputError: Wrong types, ``data`` of another model, joints that do not match.
     """
 
+    #: ``gim(None)`` reads the M held in ``data``: a watch may sample without ``q``.
+    reads_state = True
+
     def __init__(self, model, data, *, robot=None, armature: bool = True) -> None:
         mujoco = import_mujoco()
         if not isinstance(model, mujoco.MjModel):
