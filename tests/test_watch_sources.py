@@ -1,5 +1,7 @@
 """The watch's sources of M: MuJoCo's M against gimwatch's CRBA, the given-matrix holder."""
 
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pytest
@@ -10,11 +12,16 @@ from gimwatch.model.inertia import gim
 from gimwatch.model.mujoco_model import _joint_maps, compile_robot
 from gimwatch.model.robots import load_robot, random_configurations
 
+
+def mjcf_path(name: str) -> str:
+    return str(Path(__file__).parent / "data" / "mjcf" / f"{name}.xml")
+
+
 #: (robot spec, floating): URDF from example-robot-data, MJCF fixed base, MJCF free base.
 ROBOTS = [
     ("ur5", False),
-    ("tests/data/mjcf/panda.xml", False),
-    ("tests/data/mjcf/solo12.xml", True),
+    (mjcf_path("panda"), False),
+    (mjcf_path("solo12"), True),
 ]
 
 
@@ -51,7 +58,7 @@ def test_mujoco_m_in_robot_coordinates_is_gimwatch_crba(spec, floating):
 
 
 def test_a_pinocchio_model_maps_like_its_robot():
-    robot, model, data, _ = _pair("tests/data/mjcf/solo12.xml", True)
+    robot, model, data, _ = _pair(mjcf_path("solo12"), True)
     from_robot = MujocoSource(model, data, robot=robot).gim()
     from_model = MujocoSource(model, data, robot=robot.model).gim()
     np.testing.assert_array_equal(from_model, from_robot)
@@ -74,8 +81,8 @@ def test_armature_is_on_the_diagonal_and_can_be_removed():
 
 
 def test_m_at_a_given_qpos_leaves_the_users_data_alone():
-    robot, model, data, q = _pair("tests/data/mjcf/panda.xml", False, seed=5)
-    _, _, _, q_other = _pair("tests/data/mjcf/panda.xml", False, seed=6)
+    robot, model, data, q = _pair(mjcf_path("panda"), False, seed=5)
+    _, _, _, q_other = _pair(mjcf_path("panda"), False, seed=6)
     qpos_other = np.array(model.qpos0)
     _joint_maps(robot, model, q_other, qpos_other, np.zeros((model.nv, robot.nv)))
     source = MujocoSource(model, data, robot=robot)
@@ -88,7 +95,7 @@ def test_m_at_a_given_qpos_leaves_the_users_data_alone():
 
 
 def test_after_mj_step_data_holds_m_where_the_step_started():
-    robot, model, data, q = _pair("ur5", False)
+    _, model, data, _ = _pair("ur5", False)
     data.qvel[:] = 1.0
     start = data.qpos.copy()
     mujoco.mj_step(model, data)
@@ -117,7 +124,7 @@ def _message(call) -> str:
 
 def test_bad_sources_are_named_in_one_line():
     robot, model, data, _ = _pair("ur5", False)
-    other = mujoco.MjData(compile_robot(load_robot("tests/data/mjcf/panda.xml")))
+    other = mujoco.MjData(compile_robot(load_robot(mjcf_path("panda"))))
     assert _message(lambda: MujocoSource(data, data)) == (
         "model must be a mujoco.MjModel, got 'mujoco._structs.MjData'"
     )

@@ -35,10 +35,11 @@ import pinocchio as pin
 from gimwatch.errors import InputError
 from gimwatch.model.robots import Robot
 
-__all__ = ["GivenMatrix", "MujocoSource", "robot_from_model"]
+__all__ = ["GivenMatrix", "MujocoSource", "import_mujoco", "robot_from_model", "type_name"]
 
 
-def _type_name(value: object) -> str:
+def type_name(value: object) -> str:
+    """``module.Class`` of a value, for messages about a wrong type."""
     kind = type(value)
     return f"{kind.__module__}.{kind.__qualname__}"
 
@@ -50,7 +51,7 @@ def robot_from_model(model: pin.Model, *, name: str | None = None) -> Robot:
         InputError: ``model`` is not a ``pinocchio.Model``, or has no velocity coordinate.
     """
     if not isinstance(model, pin.Model):
-        raise InputError("model", "a pinocchio.Model", _type_name(model))
+        raise InputError("model", "a pinocchio.Model", type_name(model))
     if model.nv < 1:
         raise InputError("model", "a pinocchio.Model with at least one joint", f"nv = {model.nv}")
     floating = model.njoints > 1 and "FreeFlyer" in model.joints[1].shortname()
@@ -104,6 +105,11 @@ class GivenMatrix:
             raise InputError("the diagonal", "finite and > 0", f"{d[k]} at {k}")
         self._M, self._diag = None, d
 
+    def diagonal_ratio(self, q=None) -> float:
+        """δ of the held diagonal, unchecked (NaN or < 1 sends the watch to its checked path)."""
+        diag = self.gim_diagonal()
+        return float(diag.max() / diag.min())
+
     def gim(self, q=None) -> np.ndarray:
         """The held M."""
         if self._M is None:
@@ -140,9 +146,9 @@ class MujocoSource:
     def __init__(self, model, data, *, robot=None, armature: bool = True) -> None:
         mujoco = import_mujoco()
         if not isinstance(model, mujoco.MjModel):
-            raise InputError("model", "a mujoco.MjModel", _type_name(model))
+            raise InputError("model", "a mujoco.MjModel", type_name(model))
         if not isinstance(data, mujoco.MjData):
-            raise InputError("data", "a mujoco.MjData", _type_name(data))
+            raise InputError("data", "a mujoco.MjData", type_name(data))
         if data.model._address != model._address:
             raise InputError(
                 "data",
@@ -188,7 +194,7 @@ class MujocoSource:
         if isinstance(robot, pin.Model):
             robot = robot_from_model(robot)
         if not isinstance(robot, Robot):
-            raise InputError("robot", "a gimwatch Robot or a pinocchio.Model", _type_name(robot))
+            raise InputError("robot", "a gimwatch Robot or a pinocchio.Model", type_name(robot))
         if robot.nv != model.nv:
             raise InputError("robot", f"a model with nv = {model.nv} like MuJoCo's", robot.nv)
         free = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_FREE)
@@ -220,7 +226,7 @@ class MujocoSource:
         mujoco, model = self._mujoco, self.model
         if q is None:
             data = self.data
-            if not np.any(data.M[self._diag_index]):
+            if data.M[self._diag_index[0]] == 0.0 and not np.any(data.M[self._diag_index]):
                 raise InputError(
                     "data",
                     "an MjData holding M",
@@ -263,11 +269,18 @@ class MujocoSource:
         return M
 
     def gim_diagonal(self, q=None) -> np.ndarray:
-        """diag M: MuJoCo's sparse diagonal entries, no M formed (rotation leaves it alone)."""
+        """The diagonal of M from MuJoCo's sparse M, no M formed (the rotation keeps it)."""
         diag = self._data_at(q).M[self._diag_index]
         if self._armature is not None:
             diag = diag - self._armature
         return diag if self._order is None else diag[self._order]
+
+    def diagonal_ratio(self, q=None) -> float:
+        """δ = max M_ii / min M_ii, unchecked (NaN or < 1 sends the watch to its checked path)."""
+        diag = self._data_at(q).M[self._diag_index]
+        if self._armature is not None:
+            diag = diag - self._armature
+        return float(diag.max() / diag.min())
 
 
 def _rotation(quaternion_wxyz: np.ndarray) -> np.ndarray:
