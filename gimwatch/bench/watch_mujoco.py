@@ -9,11 +9,11 @@ Euler integrator, dt = :data:`DT_S`); the watch is
 ``data`` (``source = data``) or recomputing M at ``data.qpos`` on a private ``MjData``
 (``source = qpos``: kinematics + composite rigid bodies).
 
-Per (robot, watch, source), all in one run:
+Per (robot, watch, source), all in one run, each repeat timing the bare loop and every
+watch back to back (ratios within a repeat, medians over repeats):
 
-* ``step_us`` — one bare ``mj_step`` (a loop of steps timed whole, median of repeats);
-* ``sample_us`` — one ``Watch.sample`` timed alone (a loop of samples on the run's final
-  ``data``, median of passes);
+* ``step_us`` — one bare ``mj_step`` (a loop of steps timed whole);
+* ``sample_us`` — one ``Watch.sample`` timed alone (a loop of samples on one ``data``);
 * ``sample_vs_step`` = sample_us / step_us — the watch's cost per sample as a fraction of a
   step, the figure this section is for;
 * ``loop_overhead`` — (loop with the watch) / (bare loop) - 1: the same cost seen end to
@@ -96,51 +96,56 @@ def _sampler(model, metrics: tuple[str, ...], read: bool):
     return make
 
 
-def _sample_us(mujoco, model, qpos0, metrics, read: bool, samples: int, repeats: int) -> float:
-    passes = []
-    for _ in range(repeats):
-        data = mujoco.MjData(model)
-        data.qpos[:] = qpos0
-        mujoco.mj_step(model, data)
-        sample = _sampler(model, metrics, read)(data)
-        start = time.perf_counter()
-        for _ in range(samples):
-            sample(data)
-        passes.append((time.perf_counter() - start) / samples)
-    return float(np.median(passes)) * 1e6
+def _sample_s(mujoco, model, qpos0, make, samples: int) -> float:
+    """Mean time (s) of one sample, alone, on the data one step from ``qpos0``."""
+    data = mujoco.MjData(model)
+    data.qpos[:] = qpos0
+    mujoco.mj_step(model, data)
+    sample = make(data)
+    start = time.perf_counter()
+    for _ in range(samples):
+        sample(data)
+    return (time.perf_counter() - start) / samples
 
 
 def measure(context: BenchContext) -> Table:
-    """One row per (robot, watch); every ratio from timings of this run."""
+    """One row per (robot, watch); bare and watched runs interleaved in every repeat.
+
+    Each repeat times the bare loop, then for every watch the watched loop and the samples
+    alone; ratios are taken within a repeat (so a busy machine slows both sides) and the
+    median over repeats is reported.
+    """
     import mujoco
 
     robots = ROBOTS[:2] if context.quick else ROBOTS
-    steps, repeats = (50, 2) if context.quick else (3000, 5)
+    steps, repeats = (50, 2) if context.quick else (1000, 9)
     table = Table("watch_mujoco", COLUMNS)
     for spec in robots:
         robot, model = _robot_model(spec)
         rng = np.random.default_rng(context.seed)  # hinge joints only: angles in ±1 rad
         qpos0 = model.qpos0 + rng.uniform(-1.0, 1.0, model.nq)
-        context.progress(f"  {spec}: bare mj_step")
-        bare = float(np.median([_loop_s(mujoco, model, qpos0, steps) for _ in range(repeats)]))
-        step_us = bare / steps * 1e6
-        for label, (metrics, read) in WATCHES.items():
-            context.progress(f"  {spec}: watch {label}")
-            make = _sampler(model, metrics, read)
-            loop = float(
-                np.median([_loop_s(mujoco, model, qpos0, steps, make) for _ in range(repeats)])
-            )
-            sample_us = _sample_us(mujoco, model, qpos0, metrics, read, steps, repeats)
+        makers = {label: _sampler(model, *watch) for label, watch in WATCHES.items()}
+        bare, loops = [], {label: [] for label in WATCHES}
+        samples = {label: [] for label in WATCHES}
+        context.progress(f"  {spec}: {repeats} x (bare mj_step, {len(WATCHES)} watches)")
+        for _ in range(repeats):
+            bare.append(_loop_s(mujoco, model, qpos0, steps))
+            for label, make in makers.items():
+                loops[label].append(_loop_s(mujoco, model, qpos0, steps, make))
+                samples[label].append(_sample_s(mujoco, model, qpos0, make, steps))
+        bare_s = np.asarray(bare)
+        for label in WATCHES:
+            step_s = bare_s / steps
             table.add(
                 robot=robot.name,
                 nv=robot.nv,
                 watch=label.split("/")[0],
                 source=label.split("/")[1],
                 steps=steps,
-                step_us=step_us,
-                sample_us=sample_us,
-                sample_vs_step=sample_us / step_us,
-                loop_overhead=loop / bare - 1.0,
+                step_us=float(np.median(step_s)) * 1e6,
+                sample_us=float(np.median(samples[label])) * 1e6,
+                sample_vs_step=float(np.median(np.asarray(samples[label]) / step_s)),
+                loop_overhead=float(np.median(np.asarray(loops[label]) / bare_s)) - 1.0,
             )
     return table
 
