@@ -123,6 +123,19 @@ CASES = {
         "metric 'kappa_lanczos' must be sampled with q (it runs RNEA/ABA at q), "
         "got 'a matrix sample'",
     ),
+    "sample(t, q) on a matrix watch": (
+        lambda: MATRICES.sample(0.0, np.zeros(2)),
+        "sample(t, q) must be used on a watch of a robot or a MuJoCo pair, got 'a matrix watch' "
+        "(use sample_matrix(t, M) or sample_diagonal(t, d))",
+    ),
+    "time not a number": (
+        lambda: MATRICES.sample_matrix("now", np.eye(2)),
+        "t must be a time in seconds, got 'now'",
+    ),
+    "time not finite": (
+        lambda: DELTA.sample_diagonal(np.nan, [1.0, 2.0]),
+        "t must be a finite time in seconds, got nan",
+    ),
     "unknown series": (
         lambda: MATRICES.array("delta"),
         "the series name must be 't' or a watched metric ['kappa', 'diagonal_ratio'], got 'delta'",

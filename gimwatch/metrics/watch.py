@@ -470,6 +470,13 @@ class Watch:
         """
         if not self.metrics:
             return None
+        if isinstance(self.dynamics, GivenMatrix):
+            raise InputError(
+                "sample(t, q)",
+                "used on a watch of a robot or a MuJoCo pair",
+                "a matrix watch",
+                hint="use sample_matrix(t, M) or sample_diagonal(t, d)",
+            )
         if q is None and not getattr(self.dynamics, "reads_state", False):
             raise InputError("q", "given (a configuration of the robot)", None)
         if self._check_q:
@@ -505,8 +512,14 @@ class Watch:
         return self._given
 
     def _record(self, t: float, state) -> Alarm | None:
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise InputError("t", "a time in seconds", t) from None
+        if not math.isfinite(t):
+            raise InputError("t", "a finite time in seconds", t)
         values = [metric(state) for metric in self.metrics.values()]  # all, then record
-        self.times.append(float(t))
+        self.times.append(t)
         for series, value in zip(self.series.values(), values, strict=True):
             series.append(value)
         if self.alarm_metric is None:
