@@ -477,14 +477,11 @@ def test_stated_thresholds_are_the_code_constants():
     hard = "docs/findings/hard-cases.md"
     assert float(_find(hard, r"CRBA \(relative error ≤ ([\d.e-]+)\)").group(1)) == suite.GIM_RTOL
     assert suite.error_constant(49) == 10 * 7  # "C = 10·√nv"
-    _find(hard, r"C·κ·eps, C = 10·√nv\*\*, of an mpmath reference at 50\s+digits")
-    digits = {reference_planar.REFERENCE_DIGITS, reference_tree.REFERENCE_DIGITS}
-    assert digits == {50}
-    for page in ("docs/guide/bench.md", "docs/findings/accuracy-costs.md"):
-        assert int(_find(page, r"against a (\d+)-digit mpmath reference").group(1)) == 50
-    assert int(_find("README.md", r"against a (\d+)-digit mpmath reference").group(1)) == 50
-    match = _find(hard, r"a (\d+) s\s+gravity simulation \(DOP853 at ([\d.e-]+), RK4 at 1 ms")
-    assert _numbers(match) == [suite.SIMULATION_S, 1e-10]
+    (digits,) = {reference_planar.REFERENCE_DIGITS, reference_tree.REFERENCE_DIGITS}
+    match = _find(hard, r"C·κ·eps, C = 10·√nv\*\*, of an mpmath reference at (\d+)\s+digits")
+    assert int(match.group(1)) == digits
+    for page in ("docs/guide/bench.md", "docs/findings/accuracy-costs.md", "README.md"):
+        assert int(_find(page, r"against a (\d+)-digit mpmath reference").group(1)) == digits
     drift = _find(hard, r"relative energy drift ≤ ([\d.e-]+) \(10× the worst measured\)")
     assert float(drift.group(1)) == suite.ENERGY_DRIFT_LIMIT
     worst = max(cell(row, 8) for row in _stress_rows() if cell(row, 8) is not None)
@@ -565,6 +562,8 @@ def test_hard_cases_prose_quotes_the_stress_table():
 
 
 def test_tighten_figures_are_the_committed_run():
+    from gimwatch.bench import tighten as tighten_section
+
     rows = _csv("tighten.csv")
     pairs, ratios = {}, []
     for case in dict.fromkeys(r["case"] for r in rows):
@@ -578,7 +577,7 @@ def test_tighten_figures_are_the_committed_run():
         same_time = float(np.exp(np.interp(np.log(float(tight["wall_time_s"])), times, errors)))
         pairs[case] = (float(tight["error_rad"]), same_time)
         ratios.append(float(tight["error_rad"]) / same_time)
-        assert float(tight["rtol0"]) == 1e-5
+        assert float(tight["rtol0"]) == tighten_section._START
     page = "docs/findings/hard-cases.md"
     match = _find(page, r"\*\*([\d.]+)–(\d+)× less accurate than a fixed tolerance")
     assert _numbers(match) == [round(min(ratios), 1), round(max(ratios))]
@@ -594,7 +593,7 @@ def test_tighten_figures_are_the_committed_run():
         assert float(fixed) == float(f"{pairs[case][1]:.1e}"), case
     assert len(pairs) == 3 and "on three hard chains" in " ".join(_text(page).split())
     match = _find(page, r"`tighten` from rtol ([\d.e-]+) with the threshold")
-    assert float(match.group(1)) == 1e-5
+    assert float(match.group(1)) == tighten_section._START
 
 
 def test_claims_figures_are_the_library_and_demo_values():
@@ -870,7 +869,7 @@ def test_crosscheck_prose_is_the_committed_runs():
 
 
 def test_simulate_prose_is_the_demo_and_bench_settings():
-    from gimwatch.bench.watch_section import DT_S, STEPS_PER_SAMPLE
+    from gimwatch.bench.watch_section import STEPS_PER_SAMPLE
     from gimwatch.demo import paper_chain_table
 
     page = "docs/guide/simulate.md"
@@ -883,7 +882,6 @@ def test_simulate_prose_is_the_demo_and_bench_settings():
     watch = _find(page, r"RK4, a sample every\s+(\d+) steps, (\d+) links\)")
     sizes = {int(r["n"]) for r in _csv("watch.csv")}
     assert _numbers(watch) == [STEPS_PER_SAMPLE, max(sizes)]
-    assert DT_S == 1e-3
 
 
 def test_rod_chain_defaults_are_the_generator_defaults():
@@ -1060,3 +1058,151 @@ def test_bench_block_sentences_are_the_committed_summary():
     assert float(match.group(1)) == round(100 * watch["delta_sample_vs_step"], 1)
     match = _find(page, r"watching δ costs under (\d+)% of a bare ABA step")
     assert int(match.group(1)) == round(100 * watch["delta_target"])
+
+
+# --- remaining prose: settings, exit codes, what the tests run ----------------------------------
+
+
+def test_exit_statuses_are_the_cli_constants():
+    from gimwatch.cli import EXIT_BAD_INPUT, EXIT_CHECK_FAILED, EXIT_INTERRUPTED, EXIT_OK
+
+    codes = [EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED]
+    table = _find(
+        "docs/guide/cli.md",
+        r"\| (\d+) \| ok \|\n\| (\d+) \| a check failed[^\n]*\n\| (\d+) \| bad input[^\n]*\n"
+        r"\| (\d+) \| interrupted",
+    )
+    assert [int(x) for x in table.groups()] == codes
+    readme = _find(
+        "README.md",
+        r"Exit status: (\d+) ok, (\d+) a check failed, (\d+) bad input \([^)]*\), "
+        r"(\d+) interrupted",
+    )
+    assert [int(x) for x in readme.groups()] == codes
+    for page in ("docs/guide/simulate.md", "docs/guide/survey.md", "docs/findings/survey.md"):
+        assert int(_find(page, r"(?:Ctrl-C \(exit|exits) (\d+)").group(1)) == EXIT_INTERRUPTED
+
+
+def test_stress_simulation_settings_are_the_suite_code():
+    import inspect
+
+    from gimwatch.stress import suite
+
+    source = inspect.getsource(suite.simulate_case)
+    dop853 = re.search(r'"method": "DOP853", "rtol": ([\d.e-]+)', source).group(1)
+    rk4 = re.search(r'"method": "RK4", "dt": ([\d.e-]+)', source).group(1)
+    match = _find(
+        "docs/findings/hard-cases.md",
+        r"a (\d+) s\s+gravity simulation \(DOP853 at ([\d.e-]+), RK4 at (\d+) ms for floating "
+        r"bases\)",
+    )
+    assert _numbers(match) == [suite.SIMULATION_S, float(dop853), 1e3 * float(rk4)]
+    draws = inspect.getsource(suite)
+    v = re.search(
+        r"v, tau = rng.uniform\(([-\d.]+), ([\d.]+), nv\), rng.uniform\(([-\d.]+), ([\d.]+)", draws
+    )
+    match = _find(
+        "docs/findings/hard-cases.md", r"v ~ U\((−?\d+), (\d+)\), τ ~ U\((−?\d+), (\d+)\)"
+    )
+    assert [_figure(x) for x in match.groups()] == [float(x) for x in v.groups()]
+
+
+def test_figures_about_what_the_tests_run_are_the_tests():
+    denoc = (ROOT / "tests" / "test_denoc.py").read_text()
+    states = re.search(r"load_robot\(name, floating=floating\), samples=(\d+), seed=0", denoc)
+    page = "docs/guide/crosscheck.md"
+    match = _find(page, r"\(`tests/test_denoc.py`, (\d+) states per robot, both bases\)")
+    assert match.group(1) == states.group(1)
+    generated = re.search(r'parametrize\("n", \[([\d, ]+)\]\)\ndef test_generated_chains', denoc)
+    sizes = [int(x) for x in generated.group(1).split(",")]
+    match = _find(page, r"\(planar and spatial, n = (\d+)…(\d+),")
+    assert _numbers(match) == [min(sizes), max(sizes)]
+
+    longchain = (ROOT / "tests" / "test_longchain.py").read_text()
+    dense = re.search(
+        r'parametrize\("n", \[([\d, ]+)\]\)\ndef test_matrix_free_kappa_matches_the_dense',
+        longchain,
+    )
+    mpmath_rel = re.search(
+        r"matches_mpmath_at_50_digits\(\):.*?rel=([\d.e-]+)\)", longchain, re.DOTALL
+    )
+    page = "docs/findings/long-chains.md"
+    match = _find(
+        page,
+        r"planar-chain reference at 50\s+digits \(κ to ([\d.e-]+)\), the dense eigensolver "
+        r"\(n ≤ (\d+)\)",
+    )
+    assert _numbers(match) == [
+        float(mpmath_rel.group(1)),
+        max(int(x) for x in dense.group(1).split(",")),
+    ]
+    closed = re.findall(
+        r"\((\d[\d_]*), 1e-\d+\)", longchain.split("def test_long_straight_chains")[0]
+    )
+    largest = re.search(r"n = (\d[\d_]*)\n\s+record = analyze_linear", longchain).group(1)
+    closed = [*sorted({int(x.replace("_", "")) for x in closed}), int(largest.replace("_", ""))]
+    match = _find(page, r"closed forms at n = ([\d,]+),\s+([\d,]+) and ([\d,]+)\.")
+    assert [_figure(x) for x in match.groups()] == closed
+
+
+def test_startup_and_chain_1000_settings_are_the_committed_runs():
+    repeats = {r["case"]: int(r["repeats"]) for r in _csv("startup.csv")}
+    page = "docs/getting-started.md"
+    match = _find(page, r"\(`gimwatch bench startup`, medians of (\d+) runs,")
+    quoted = ("import gimwatch", "import pinocchio", "gimwatch analyze ur5")
+    assert {repeats[case] for case in quoted} == {int(match.group(1))}
+    _find(page, r"`gimwatch demo` takes [\d.]+ s \(one run\)")
+    assert repeats["gimwatch demo"] == 1
+    summary = json.loads((BENCH / "chain_1000" / "summary.json").read_text())
+    match = _find(
+        "docs/findings/long-chains.md",
+        r"`scenes/chain_1000.toml` \(DOP853, rtol = atol = ([\d.e-]+), δ watched\) simulates "
+        r"(\d+) s",
+    )
+    integrator = summary["integrator"]
+    assert integrator["method"] == "DOP853" and integrator["rtol"] == integrator["atol"]
+    assert _numbers(match) == [integrator["rtol"], summary["simulated_time_s"]]
+    assert summary["watched"] == ["diagonal_ratio"]
+
+
+def test_claims_quote_every_demo_estimator_error():
+    demo = test_simulate.PUBLISHED_DEMO
+    match = _find(
+        "docs/findings/claims.md",
+        r"for the swinging 4-link chain, ([\d.]+) for 10 links, ([\d.]+) for 20:",
+    )
+    assert _numbers(match) == [demo[10]["median"], demo[20]["median"]]
+
+
+def test_tracker_prose_is_the_committed_cost_run():
+    rows = [r for r in _csv("cost/tracker_samples.csv") if r["method"] == "tracker"]
+    cheaper = [int(r["n"]) for r in rows if r["vs_dense"] != "nan" and float(r["vs_dense"]) < 1]
+    dearer = [int(r["n"]) for r in rows if r["vs_dense"] != "nan" and float(r["vs_dense"]) >= 1]
+    page = "docs/findings/cost.md"
+    _find(page, r"the tracker breaks even with it at about a hundred links")
+    assert min(cheaper) == 100 and max(dearer) < 100
+    _find(page, r"for a few dozen O\(n\) products per sample")
+    assert all(12 <= float(r["products_median"]) <= 48 for r in rows)
+
+
+def test_bench_block_work_precision_table_is_the_committed_csv():
+    rows = [r for r in _csv("integrators.csv") if r["n"] == "10" and r["status"] == "completed"]
+    acceptance = json.loads((BENCH / "summary.json").read_text())["sections"]["integrators"][
+        "acceptance"
+    ]
+    table = _block_table("Work-precision of integrators (MuJoCo peer)")
+    assert len(table) == len({(r["simulator"], r["method"]) for r in rows})
+    for row in table:
+        simulator, method = row["10-link chain"].split(" ", 1)
+        runs = [r for r in rows if r["simulator"] == simulator and r["method"] == method]
+        best = min(runs, key=lambda r: float(r["error_rad"]))
+        assert [row["smallest error (rad)"], row["its wall (s)"], row["its energy drift"]] == [
+            _g3(best["error_rad"]),
+            _g3(best["wall_s"]),
+            _g3(best["energy_drift"]),
+        ], row
+        reached = any(float(r["error_rad"]) <= 1e-10 for r in runs)
+        assert (row["wall to 1e-10 rad (s)"] != "nan") == reached, row
+    walls = {row["10-link chain"]: row["wall to 1e-10 rad (s)"] for row in table}
+    assert walls["gimwatch DOP853"] == _g3(acceptance["gimwatch_dop853_interpolated_s"])
+    assert walls["mujoco RK4"] == _g3(acceptance["mujoco_rk4_interpolated_s"])
