@@ -28,6 +28,7 @@ from gimwatch.suggest import did_you_mean
 __all__ = ["get_argument_parser", "main"]
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_TERMINATED = 143  # SIGTERM: 128 + 15, as EXIT_INTERRUPTED is 128 + SIGINT
 
 
 class UsageError(GimwatchError):

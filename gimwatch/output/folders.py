@@ -229,22 +229,24 @@ class Reservation:
         self.committed = False
 
     def __enter__(self) -> Reservation:
-        with signals_held():
-            held = _HELD.get(self.target)
-            if held is not None:
-                held[1] += 1
-                return self
-            created = _make_parents(self.target.parent, self.shown)
-            try:
-                lock = _Lock(self.target, self.shown)
-            except BaseException:
-                _remove_parents(created)
-                raise
-            _HELD[self.target] = [lock, 1, created]
+        held = False
         try:
+            with signals_held():
+                if self.target in _HELD:
+                    _HELD[self.target][1] += 1
+                else:
+                    created = _make_parents(self.target.parent, self.shown)
+                    try:
+                        lock = _Lock(self.target, self.shown)
+                    except BaseException:
+                        _remove_parents(created)
+                        raise
+                    _HELD[self.target] = [lock, 1, created]
+                held = True
             check_folder_target(self.target)  # it may have changed before we held the lock
-        except BaseException:
-            self.__exit__(None, None, None)
+        except BaseException:  # a refusal, or a signal delivered on leaving signals_held
+            if held:
+                Reservation.__exit__(self, None, None, None)
             raise
         return self
 
@@ -290,15 +292,14 @@ class ResultsFolder(Reservation):
 
     def __enter__(self) -> ResultsFolder:
         super().__enter__()
-        with signals_held():
-            try:
-                self.staging = Path(
-                    tempfile.mkdtemp(prefix=f".{self.target.name}{STAGING}", dir=self.target.parent)
-                )
-            except OSError as exc:
-                super().__exit__(None, None, None)
-                raise OutputError(self.shown, _problem(exc)) from exc
-        remove_stale(self.target, keep=self.staging)
+        try:
+            with signals_held():
+                prefix = f".{self.target.name}{STAGING}"
+                self.staging = Path(tempfile.mkdtemp(prefix=prefix, dir=self.target.parent))
+            remove_stale(self.target, keep=self.staging)
+        except BaseException as exc:  # a signal delivered on leaving signals_held, included
+            self.__exit__(type(exc), exc, exc.__traceback__)  # raises OutputError for OSError
+            raise
         return self
 
     def __exit__(
@@ -307,10 +308,10 @@ class ResultsFolder(Reservation):
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        with signals_held():
+        with signals_held():  # one block: a signal cannot come between the two clean-ups
             if not self.committed and self.staging is not None:
                 shutil.rmtree(self.staging, ignore_errors=True)
-        super().__exit__(kind, exc, tb)
+            super().__exit__(kind, exc, tb)
         staging = str(self.staging)
         if isinstance(exc, OutputError) and exc.path.startswith(staging):
             raise OutputError(self.shown, exc.problem) from exc  # name the folder, not its copy
