@@ -19,6 +19,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.errors import (
         BackendWarning,
         ConditioningError,
+        ExampleRobotWarning,
         GimwatchError,
         GimwatchWarning,
         IllConditionedWarning,
@@ -71,6 +72,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
 #: Public name -> the module that defines it (imported on first access).
 _EXPORTS: dict[str, str] = {
     "BackendWarning": "gimwatch.errors",
+    "ExampleRobotWarning": "gimwatch.errors",
     "ChainSpec": "gimwatch.model.chains",
     "ConditioningError": "gimwatch.errors",
     "CrossCheckResult": "gimwatch.crosscheck",
@@ -140,6 +142,7 @@ __all__ = [
     "ConditioningError",
     "CrossCheckResult",
     "DenocModel",
+    "ExampleRobotWarning",
     "GimAnalysis",
     "GimwatchError",
     "GimwatchWarning",

@@ -16,8 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from gimwatch.output.atomic import prepare_directory, write_text_atomic
-from gimwatch.simulation.results_folder import summarize, versions, write_simulation
+from gimwatch.output.atomic import write_text_atomic
+from gimwatch.output.folders import ResultsFolder, write_marker
+from gimwatch.simulation.results_folder import summarize, versions, write_simulation_files
 from gimwatch.simulation.scene import Scene, parse_scene
 from gimwatch.simulation.simulate import Simulation, Trajectory
 
@@ -79,6 +80,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
     t, eig = series(first, "eigenvalues")
     plots.plot_eigenvalues(t, eig, ax=axes[0, 0])
     plots.plot_diagonal(t, series(first, "diagonal")[1], ax=axes[0, 1])
+    axes[0, 1].set_ylabel("diagonal element M_ii [kg·m²]")  # the rod chains are all revolute
     axes[1, 0].semilogy(t, series(first, "kappa")[1])
     axes[1, 0].set(xlabel="time [s]", ylabel="κ₂ = λmax/λmin [-]", title="Condition number")
     axes[1, 1].semilogy(t, series(first, "diagonal_ratio")[1])
@@ -91,6 +93,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
     for ax, n in zip(axes[0], longer, strict=True):
         t, kappa = series(n, "kappa")
         plots.plot_kappa_and_delta(t, kappa, series(n, "diagonal_ratio")[1], label=f"n={n}", ax=ax)
+        ax.set_title(f"{n}-link chain")  # the figure's title says what is drawn
     fig.suptitle("Fig. 3 — condition number and diagonal ratio, each relative to t = 0")
     save(fig, "fig3_kappa_delta.png")
 
@@ -105,6 +108,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
             label=f"n={n}",
             ax=ax,
         )
+        ax.set_title(f"{n}-link chain")
     fig.suptitle("Fig. 4 — pivot ratios of Gaussian elimination")
     save(fig, "fig4_pivot_ratios.png")
 
@@ -114,6 +118,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
         plots.plot_kappa_and_scaled(
             t, kappa, series(n, "scaled_diagonal_ratio")[1], label=f"n={n}", ax=ax
         )
+        ax.set_title(f"{n}-link chain")
     fig.suptitle("Fig. 5 — condition number and scaled diagonal ratio αδ (α from t = 0)")
     save(fig, "fig5_kappa_scaled.png")
 
@@ -135,9 +140,9 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
 
 def _animation(run: Trajectory, path: Path, *, frame_s: float = 0.05) -> Path:
     """A GIF of the swinging chain coloured by κ₂ (matplotlib's PillowWriter)."""
-    import matplotlib.pyplot as plt
     import pinocchio as pin
     from matplotlib.animation import PillowWriter
+    from matplotlib.figure import Figure  # no pyplot: nothing to close afterwards
 
     from gimwatch.model.robots import load_robot
     from gimwatch.output import figures as plots
@@ -157,11 +162,9 @@ def _animation(run: Trajectory, path: Path, *, frame_s: float = 0.05) -> Path:
         np.array(xy),
         run.watch["watch_kappa"][::every],
         title=f"{robot.name} swinging, coloured by κ₂",
+        fig=Figure(figsize=(5, 5), layout="constrained"),
     )
-    tmp = path.with_name(f".{path.name}.tmp.gif")
-    animation.save(tmp, writer=PillowWriter(fps=round(1 / frame_s)))
-    plt.close(animation._fig)
-    tmp.replace(path)
+    animation.save(path, writer=PillowWriter(fps=round(1 / frame_s)))  # in the staging folder
     return path
 
 
@@ -169,7 +172,12 @@ def _fmt(x: Any, spec: str = ".4g") -> str:
     return "—" if x is None else format(x, spec)
 
 
-def _report(runs: dict[int, Trajectory], summaries: dict[int, dict], figures: list[Path]) -> str:
+def _report(
+    runs: dict[int, Trajectory],
+    summaries: dict[int, dict],
+    figures: list[Path],
+    stopped: Trajectory | None,
+) -> str:
     info = versions()
     lines = [
         "# gimwatch demo — the paper's swinging chains (Shah & Saha 2013, Sec. 4)",
@@ -182,6 +190,7 @@ def _report(runs: dict[int, Trajectory], summaries: dict[int, dict], figures: li
         "ABA; the watch samples every 0.01 s. α = κ(t0)/δ(t0) is fixed at t = 0 (Eq. 15) "
         "and never tuned.",
         "",
+        *_stopped_lines(stopped),
         "## Simulation",
         "",
         "| n | time (s) | steps | RHS evals | wall (s) | rel. energy drift |",
@@ -223,7 +232,7 @@ def _report(runs: dict[int, Trajectory], summaries: dict[int, dict], figures: li
             f"| {n} | {q['alpha']:.4g} | {q['pearson_log']:.3f} | {q['spearman']:.3f} | "
             f"{q['median_relative_error']:.3f} | {q['max_relative_error']:.3f} |"
         )
-    worst = max(summaries[n]["estimator_quality"]["max_relative_error"] for n in runs)
+    worst = max((summaries[n]["estimator_quality"]["max_relative_error"] for n in runs), default=0)
     lines += [
         "",
         "Reading: κ is largest at the straight start (≈ 4n⁴) and δ = n³ there; as the chain "
@@ -236,8 +245,22 @@ def _report(runs: dict[int, Trajectory], summaries: dict[int, dict], figures: li
     ]
     lines += [f"- [{p.name}]({p.name})" for p in figures]
     lines += ["", "Per-chain results (trajectory, watch series, summary.json): "]
-    lines += [f"- [chain_{n}/](chain_{n}/summary.json)" for n in sorted(runs)]
+    chains = sorted(runs) + ([stopped.q.shape[1]] if stopped is not None else [])
+    lines += [f"- [chain_{n}/](chain_{n}/summary.json)" for n in chains]
     return "\n".join(lines) + "\n"
+
+
+def _stopped_lines(stopped: Trajectory | None) -> list[str]:
+    if stopped is None:
+        return []
+    n = stopped.q.shape[1]
+    end = float(stopped.t[-1]) if stopped.t.size else 0.0
+    return [
+        f"**Stopped early**: chain_{n} ended as `{stopped.status}` at t = {end:.4g} s "
+        f"({stopped.message}); its results so far are in `chain_{n}/`, the chains after it "
+        "were not run, and the tables and figures below show the completed chains only.",
+        "",
+    ]
 
 
 def run_demo(
@@ -250,25 +273,37 @@ def run_demo(
 ) -> Path:
     """Simulate the paper's chains, write figures, results and ``report.md``; return its path.
 
+    The results folder is replaced whole (:mod:`gimwatch.output.folders`). A chain whose run
+    ends early (Ctrl-C: status ``interrupted``) is written as far as it went, the later
+    chains are not run, and the report says so.
+
     Args:
-        output: Folder to write into (created).
+        output: Results folder (created; a non-empty folder must be a gimwatch results folder).
         lengths: Chain lengths to simulate.
         duration_s: Simulated time per chain.
         animate: Chain length to animate as a GIF (None: no animation).
         progress: Given n, returns a progress callback for that chain's run (or None).
     """
-    output = prepare_directory(output)
     runs: dict[int, Trajectory] = {}
     summaries: dict[int, dict] = {}
-    for n in lengths:
-        scene: Scene = parse_scene(
-            paper_chain_table(n, duration_s=duration_s), source=f"<demo chain_{n}>"
-        )
-        trajectory = Simulation(scene).run(progress=progress(n) if progress else None)
-        trajectory.raise_for_status()
-        if trajectory.status != "completed":
-            raise KeyboardInterrupt
-        write_simulation(trajectory, output / f"chain_{n}", plots=False)
-        runs[n], summaries[n] = trajectory, summarize(trajectory)
-    figures = _figures(runs, output, animate)
-    return write_text_atomic(output / "report.md", _report(runs, summaries, figures))
+    stopped: Trajectory | None = None
+    with ResultsFolder(output, writer="demo") as folder:
+        for n in lengths:
+            scene: Scene = parse_scene(
+                paper_chain_table(n, duration_s=duration_s), source=f"<demo chain_{n}>"
+            )
+            trajectory = Simulation(scene).run(progress=progress(n) if progress else None)
+            trajectory.raise_for_status()
+            chain = folder.staging / f"chain_{n}"
+            chain.mkdir()
+            write_simulation_files(trajectory, chain, plots=False)
+            write_marker(chain, "simulate")
+            if trajectory.status != "completed":  # Ctrl-C: keep what was computed, stop
+                stopped = trajectory
+                break
+            runs[n], summaries[n] = trajectory, summarize(trajectory)
+        figures = _figures(runs, folder.staging, animate) if runs else []
+        report = _report(runs, summaries, figures, stopped)
+        write_text_atomic(folder.staging / "report.md", report)
+        folder.commit()
+    return Path(output) / "report.md"

@@ -117,5 +117,13 @@ class IllConditionedWarning(GimwatchWarning):
     """The GIM's condition number (or its estimate) crossed a threshold."""
 
 
+class ExampleRobotWarning(GimwatchWarning):
+    """An example-robot-data name whose model differs from what its name promises.
+
+    gimwatch reads the URDF as written; ``example_robot_data.load(name)`` may lock joints or
+    add rotor inertias, and a few names ship another robot's description.
+    """
+
+
 class BackendWarning(GimwatchWarning):
     """gimwatch chose another dynamics backend than the one asked for, and why."""

@@ -31,6 +31,7 @@ from gimwatch.errors import GimwatchError, URDFWarning
 from gimwatch.metrics.dense_analysis import analyze_configuration
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
 from gimwatch.model.robots import MAX_TREE_DEPTH, MAX_URDF_BYTES, load_robot, neutral_configuration
+from gimwatch.output.folders import write_marker
 from gimwatch.simulation.scene import MAX_SCENE_BYTES
 
 BAD = Path(__file__).parent / "data" / "bad"
@@ -189,6 +190,7 @@ def _good_results(folder: Path) -> None:
     folder.mkdir()
     (folder / "summary.json").write_text('{"status": "completed"}\n')
     (folder / "trajectory.csv").write_text("t,q:joint_1\n0.0,0.1\n")
+    write_marker(folder, "simulate")
 
 
 @pytest.mark.usefixtures("hang_guard")

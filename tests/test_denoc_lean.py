@@ -83,3 +83,23 @@ def test_watch_delta_comes_from_the_lean_kernel_and_matches_the_closed_form():
         watch.sample(0.1 * k, q)
         d = np.diag(planar_rod_chain_gim(q, 2.2, 1.0))
         assert watch.series["diagonal_ratio"][k] == pytest.approx(d.max() / d.min(), rel=1e-12)
+
+
+@pytest.mark.parametrize(("spec", "floating"), CASES)
+def test_shifted_factor_solves_m_minus_sigma_and_counts_its_inertia(spec, floating):
+    """After factor_shifted(σ), gim_solve gives (M − σ·1)⁻¹ y, and the factor reports every
+    pivot positive exactly when σ < λmin (Sylvester's law of inertia), against Pinocchio's M."""
+    from gimwatch.denoc import fused
+
+    robot, lean, model, data, q, _, a, _ = _setup(spec, floating)
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    low = np.linalg.eigvalsh(M)[0]
+    lean.configure(q)
+    buffers = lean.compiled_operator_arguments()
+    assert fused.factor_shifted(0.5 * low, *buffers)
+    x = np.linalg.solve(M - 0.5 * low * np.eye(robot.nv), a)
+    np.testing.assert_allclose(lean.gim_solve(a), x, rtol=1e-8, atol=1e-10 * abs(x).max())
+    assert fused.factor_shifted(low * (1 - 1e-6), *buffers)
+    assert not fused.factor_shifted(low * (1 + 1e-6), *buffers)
+    assert not fused.factor_shifted(2.0 * low, *buffers)

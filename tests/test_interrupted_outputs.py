@@ -22,6 +22,7 @@ import gimwatch.bench
 import gimwatch.simulation.results_folder
 from gimwatch.bench import SectionResult, Table
 from gimwatch.cli import main
+from gimwatch.output import folders
 from gimwatch.simulation.simulate import Simulation
 
 SCENE = """robot = "chain:3"
@@ -106,19 +107,20 @@ def test_simulate_interrupted_while_writing_keeps_the_previous_folder(
     assert sorted(p.name for p in out.parent.iterdir()) == ["out", "scene.toml"]
 
 
-@pytest.mark.parametrize("call", ["chmod", "replace"])
+@pytest.mark.parametrize("call", ["chmod", "rename"])
 def test_simulate_failing_to_write_keeps_the_previous_folder(previous, monkeypatch, capsys, call):
     """A full disk while writing a file, or a refused rename: one line, the old folder stays."""
     scene, out, before = previous
-    original = getattr(gimwatch.simulation.results_folder.os, call)
+    original = getattr(folders.os, call)
 
     def broken(*args, **kwargs):
-        if call == "replace" and (Path(args[1]) != out or Path(args[0]).name == "previous"):
+        if call == "rename" and ".gimwatch-staging-" not in Path(args[0]).name:
             # only the rename of the new folder into place fails, not putting the old one back
             return original(*args, **kwargs)
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(gimwatch.simulation.results_folder.os, call, broken)
+    monkeypatch.setattr(folders, "_exchange", lambda a, b: False)  # the two-rename fallback
+    monkeypatch.setattr(folders.os, call, broken)
     code = main(["simulate", str(scene), "-o", str(out)])
     err = capsys.readouterr().err
     assert code == 2, err
@@ -160,4 +162,4 @@ def test_bench_interrupted_in_a_section_keeps_the_finished_ones(tmp_path, monkey
     assert (out / "fake_timings.csv").read_text().splitlines() == ["n,seconds", "4,1.5e-06"]
     report = (out / "report.md").read_text()
     assert "the finished section" in report and "Estimator quality" not in report
-    assert not [p for p in out.iterdir() if p.name.startswith(".")]
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == [folders.MARKER]

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from gimwatch.cli import main
+from gimwatch.output.folders import write_marker
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -94,7 +95,8 @@ def test_rewriting_replaces_the_folder_whole(tmp_path, capsys):
     shutil.copy(SCENES / "ur5_falling.toml", scene)
     out = tmp_path / "run"
     out.mkdir()
-    (out / "stale.txt").write_text("old")
+    (out / "stale.png").write_text("old")  # a file an earlier run wrote (its marker says so)
+    write_marker(out, "simulate")
     assert main(["simulate", str(scene), "-o", str(out)]) == 0
-    assert not (out / "stale.txt").exists() and (out / "summary.json").exists()
+    assert not (out / "stale.png").exists() and (out / "summary.json").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run", "s.toml"]

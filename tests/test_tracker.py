@@ -67,6 +67,9 @@ def test_tracker_matches_dense_kappa_along_the_paper_trajectories(n):
     assert len(warm) >= 0.95 * (len(results) - 1)  # the warm start is the rule
     # products per sample are reported and add up
     assert all(r.products == r.products_max + r.products_min > 0 for r in results)
+    # shift-invert separates λmin: a warm sample takes one factor and a handful of products
+    assert np.median([r.products for r in warm]) <= 10
+    assert np.median([r.factors for r in warm]) == 1
 
 
 def test_tracker_matches_mpmath_on_a_50_link_chain():
@@ -106,6 +109,39 @@ def test_tracker_matches_dense_along_a_200_link_swinging_chain():
             assert abs(result.lambda_max - top) / top <= RTOL
             assert abs(result.lambda_min * inverse - 1) <= RTOL
     assert result.kappa > 1e9
+
+
+def test_lambda_min_falling_below_the_shift_is_detected_and_refactored():
+    """λmin drops 7 % between two samples (straight chain, then bent): the first shift
+    σ = λmin(previous)·(1 − s) lies above the new λmin, a pivot of M − σ·1 is not positive,
+    and the tracker widens s and refactors instead of trusting the factor."""
+    robot = load_robot("chain:10")
+    data = robot.new_data()
+    tracker = KappaTracker(denoc_model(robot).lean(), robot.nv)
+    for q in (np.full(10, 0.3), np.full(10, 0.3) + 1e-3, np.zeros(10), np.zeros(10) + 1e-3):
+        result = tracker.sample(q)
+        values = np.linalg.eigvalsh(pin.crba(robot.model, data, q))
+        assert result.kappa == pytest.approx(values[-1] / values[0], rel=RTOL)
+        assert result.lambda_min == pytest.approx(values[0], rel=RTOL)
+        if q[0] == 0.0:  # the drop: refactored; right after it: one factor again
+            assert result.factors == 2, result
+        elif q[0] == 1e-3:
+            assert result.factors == 1, result
+
+
+def test_tracker_leaves_the_lean_model_configuration_alone():
+    """The tracker factors M − σ·1 in its own buffers: a LeanModel configured by its owner
+    (a simulation backend, the watch) still solves with M(q) of the owner's q."""
+    robot = load_robot("chain:8")
+    lean = denoc_model(robot).lean()
+    q = np.linspace(-0.5, 0.5, 8)
+    lean.configure(q)
+    tracker = KappaTracker(lean, robot.nv)
+    tracker.sample(np.full(8, 0.4))
+    tracker.sample(np.full(8, 0.41))
+    y = np.arange(1.0, 9.0)
+    M = pin.crba(robot.model, robot.new_data(), q)
+    np.testing.assert_allclose(lean.gim_solve(y), np.linalg.solve(M, y), rtol=1e-10)
 
 
 def test_pinocchio_products_give_the_same_kappa():

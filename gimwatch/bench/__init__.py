@@ -4,9 +4,12 @@ Each section is a module of this package with ``run(context) -> SectionResult``;
 :data:`SECTIONS` registry names them. A section whose module cannot be imported (an optional
 dependency missing) is reported as skipped by ``all`` and refused when asked for by name.
 
-Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder as
-soon as it finishes, so an interrupted run keeps what it measured; ``report.md`` is then
-written from the sections that finished, headed by versions, date, CPU and thread settings.
+Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder's
+staging copy as soon as it finishes; ``report.md`` is then written from the sections that
+finished, headed by versions, date, CPU and thread settings, and the folder is swapped into
+place (:mod:`gimwatch.output.folders`), even when the run was interrupted: it keeps what it
+measured. Files of the previous folder that this run does not rewrite are kept (other
+sections' tables, the folder's README).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gimwatch.errors import InputError
-from gimwatch.output.atomic import prepare_directory
+from gimwatch.output.folders import ResultsFolder
 
 __all__ = [
     "SECTIONS",
@@ -195,20 +198,22 @@ def run_bench(
         reason = section_status(name)
         if reason:
             raise InputError(f"bench section {name!r}", "available", reason)
-    output = prepare_directory(output)
-    context = BenchContext(output=output, quick=quick, progress=progress, seed=seed)
-    progress("measuring the environment (BLAS threads)")
-    env = environment(quick=quick)
-    results: list[SectionResult] = []
-    try:
-        for name in names:
-            progress(f"section {name}")
-            module = importlib.import_module(SECTIONS[name].module)
-            result = module.run(context)
-            write_section(output, result)
-            results.append(result)
-    finally:  # an interrupted run still reports the sections it finished
-        report = write_report(output, env, results, skipped, quick=quick)
+    with ResultsFolder(output, writer="bench", keep_previous=True) as folder:
+        staging = folder.staging
+        context = BenchContext(output=staging, quick=quick, progress=progress, seed=seed)
+        progress("measuring the environment (BLAS threads)")
+        env = environment(quick=quick)
+        results: list[SectionResult] = []
+        try:
+            for name in names:
+                progress(f"section {name}")
+                module = importlib.import_module(SECTIONS[name].module)
+                result = module.run(context)
+                write_section(staging, result)
+                results.append(result)
+        finally:  # an interrupted run still reports (and keeps) the sections it finished
+            write_report(staging, env, results, skipped, quick=quick)
+            output = folder.commit()
     if readme is not None:
         update_readme(Path(readme), env, results, output)
-    return report
+    return output / "report.md"

@@ -5,12 +5,14 @@ module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int
 :data:`COMMANDS` maps each name to its module and one-line help. Only the module of the
 command being run is imported (a command's imports cost nothing to the others, nor to
 ``gimwatch --help``). Errors gimwatch raises on purpose become one line on stderr and exit
-status 2; a mistyped command gets a suggestion.
+status 2; a mistyped command gets a suggestion. SIGINT and SIGTERM end a command with one line
+and exit status 130 or 143 (:mod:`gimwatch.cli._signals`).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 import warnings
@@ -19,6 +21,7 @@ from importlib import import_module  # bound now: tests may patch importlib
 from types import ModuleType
 
 from gimwatch._version import __version__
+from gimwatch.cli._signals import LATCH, fault_pause
 from gimwatch.errors import GimwatchError
 from gimwatch.suggest import did_you_mean
 
@@ -155,8 +158,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line and return its exit status.
 
     Warnings print as one ``gimwatch: warning: ...`` line each; errors gimwatch raises on
-    purpose as one ``gimwatch: error: ...`` line, with exit status 2.
+    purpose as one ``gimwatch: error: ...`` line, with exit status 2; SIGINT (Ctrl-C) and
+    SIGTERM as ``gimwatch: interrupted``, with exit status 130 or 143.
     """
+    installed = LATCH.install()
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
@@ -167,7 +172,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("gimwatch: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return LATCH.exit_status
+    finally:
+        if installed:
+            LATCH.uninstall()
 
 
 _shown: set[str] = set()
@@ -188,6 +196,11 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def _run(argv: Sequence[str] | None) -> int:
     from threadpoolctl import threadpool_limits
 
+    if os.environ.get("GIMWATCH_FAULT_PAUSE"):  # fault tests: pause at a phase, get a signal
+        from gimwatch.output import folders
+
+        folders.phase_hook = fault_pause
+        fault_pause("import")
     argv = sys.argv[1:] if argv is None else list(argv)
     args = get_argument_parser(_command_in(argv) or "").parse_args(argv)
     # GIMs are small dense matrices: multi-threaded OpenBLAS makes their eigen-solves
@@ -196,5 +209,7 @@ def _run(argv: Sequence[str] | None) -> int:
         return int(args.run(args))
 
 
-def _entry_point() -> None:  # console script
-    sys.exit(main())
+def _entry_point() -> None:  # console script of earlier installs: see gimwatch.__main__
+    from gimwatch.__main__ import entry_point
+
+    entry_point()

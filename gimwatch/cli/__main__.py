@@ -1,7 +1,5 @@
 """``python -m gimwatch.cli``."""
 
-import sys
+from gimwatch.__main__ import entry_point
 
-from gimwatch.cli import main
-
-sys.exit(main())
+entry_point()

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from gimwatch.cli._progress import ProgressBar
+from gimwatch.cli._signals import LATCH
 from gimwatch.demo import run_demo
 from gimwatch.errors import InputError
 
@@ -54,4 +55,7 @@ def run(args: argparse.Namespace) -> int:
             bars[-1].close()
     print(report.read_text())
     print(f"wrote {report}", file=sys.stderr)
+    if LATCH.signum is not None:
+        print("gimwatch: interrupted; results so far were written", file=sys.stderr)
+        return LATCH.exit_status
     return 0

@@ -8,6 +8,8 @@ import sys
 from pathlib import Path
 
 from gimwatch.cli._progress import ProgressBar
+from gimwatch.cli._signals import LATCH, fault_pause
+from gimwatch.output.folders import Reservation
 from gimwatch.simulation.backends import BACKENDS
 from gimwatch.simulation.results_folder import summarize, write_simulation
 from gimwatch.simulation.scene import load_scene
@@ -36,14 +38,25 @@ def run(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     if args.backend is not None:
         scene = dataclasses.replace(scene, backend=args.backend)
-    simulation = Simulation(scene)  # every error that needs the robot is raised here
     output = Path(args.output) if args.output else Path("results") / Path(args.scene).stem
-    bar = ProgressBar(f"{simulation.robot.name}")
-    try:
-        trajectory = simulation.run(progress=bar)
-    finally:
-        bar.close()
-    folder = write_simulation(trajectory, output)
+    # compiled code runs from here on: a signal is noted and acted on between steps
+    with LATCH.deferred("hard"):
+        simulation = Simulation(scene)  # every error that needs the robot is raised here
+        LATCH.check()
+    with Reservation(output):  # refused (another writer, not ours) before the work
+        with LATCH.deferred("hard"):
+            bar = ProgressBar(f"{simulation.robot.name}")
+
+            def progress(fraction: float) -> object:
+                fault_pause("compute")
+                return bar(fraction)
+
+            try:
+                trajectory = simulation.run(progress=LATCH.checking(progress))
+            finally:
+                bar.close()
+        with LATCH.deferred("soft"):  # a first signal lets the write complete
+            folder = write_simulation(trajectory, output)
     summary = summarize(trajectory)
     for alarm in trajectory.alarms:
         print(
@@ -73,9 +86,9 @@ def run(args: argparse.Namespace) -> int:
         )
     print("\n".join(lines))
     print(f"wrote {folder}", file=sys.stderr)
-    if trajectory.status == "interrupted":
+    if trajectory.status == "interrupted" or LATCH.signum is not None:
         print("gimwatch: interrupted; results so far were written", file=sys.stderr)
-        return 130
+        return LATCH.exit_status
     if trajectory.status in ("diverged", "failed"):
         print(
             f"gimwatch: error: {trajectory.message}; results so far were written", file=sys.stderr

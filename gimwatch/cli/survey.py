@@ -9,7 +9,9 @@ import time
 from pathlib import Path
 
 from gimwatch.cli._format import non_negative_int, positive_int, table
-from gimwatch.errors import GimwatchError, OutputError
+from gimwatch.cli._signals import LATCH, fault_pause
+from gimwatch.errors import GimwatchError
+from gimwatch.output.folders import Reservation
 from gimwatch.survey.report import write_survey
 from gimwatch.survey.run import run_survey
 from gimwatch.survey.trajectory import TrajectorySettings
@@ -82,43 +84,13 @@ def _positive_seconds(text: str) -> float:
 
 def run(args: argparse.Namespace) -> int:
     """Survey, write the files, print the summary table."""
-    from tqdm import tqdm
-
     output = Path(args.output)
-    if output.exists() and not output.is_dir():  # fail before the work, not after it
-        raise OutputError(str(output), "is a file, not a folder; give a folder name")
-    trajectories = None
-    if args.trajectory:
-        dt = TrajectorySettings.dt_s  # samples fall on RK4 steps: a whole number of dt
-        sample_s = max(1, round(min(TrajectorySettings.sample_s, args.duration / 10) / dt)) * dt
-        trajectories = TrajectorySettings(
-            count=args.runs, duration_s=args.duration, sample_s=sample_s
-        )
-    start = time.perf_counter()
-    # disable=None: the bar shows on a terminal only, so logs and pipes get no carriage returns
-    with tqdm(
-        total=None, unit="chunk", file=sys.stderr, desc="survey", leave=False, disable=None
-    ) as bar:
-
-        def progress(finished: int, total: int) -> None:
-            bar.total = total
-            bar.update(finished - bar.n)
-
-        result = run_survey(
-            args.robots,
-            samples=args.samples,
-            seed=args.seed,
-            floating=args.floating,
-            chunk_size=args.chunk_size,
-            workers=args.workers,
-            scheduler=args.scheduler,
-            progress=progress,
-            trajectories=trajectories,
-        )
-    wall_time_s = time.perf_counter() - start
-    if not result.robots and result.failures and not result.interrupted:
-        raise GimwatchError(result.failures[0].reason)  # nothing to report: nothing written
-    report = write_survey(result, output, wall_time_s=wall_time_s)
+    with Reservation(output):  # refused (another writer, not ours) before the work
+        result, wall_time_s = _survey(args)
+        if not result.robots and result.failures and not result.interrupted:
+            raise GimwatchError(result.failures[0].reason)  # nothing to report: nothing written
+        with LATCH.deferred("soft"):  # a first signal lets the write complete
+            report = write_survey(result, output, wall_time_s=wall_time_s)
     rows = [
         [
             r.name,
@@ -138,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         for r in result.robots
     ]
     headers = ["robot", "nv", "samples", "kappa med", "kappa max", "pearson", "spearman", "ad err"]
-    if trajectories is not None:
+    if args.trajectory:
         headers += ["run pearson", "run ad err"]
     if rows:
         print(table(headers, rows))
@@ -149,7 +121,43 @@ def run(args: argparse.Namespace) -> int:
         f"{wall_time_s:.1f} s)",
         file=sys.stderr,
     )
-    if result.interrupted:
+    if result.interrupted or LATCH.signum is not None:
         print("gimwatch: interrupted; partial results written", file=sys.stderr)
-        return 130
+        return LATCH.exit_status
     return 0
+
+
+def _survey(args: argparse.Namespace):
+    """Run the survey the arguments ask for; return it and its wall time in seconds."""
+    from tqdm import tqdm
+
+    trajectories = None
+    if args.trajectory:
+        dt = TrajectorySettings.dt_s  # samples fall on RK4 steps: a whole number of dt
+        sample_s = max(1, round(min(TrajectorySettings.sample_s, args.duration / 10) / dt)) * dt
+        trajectories = TrajectorySettings(
+            count=args.runs, duration_s=args.duration, sample_s=sample_s
+        )
+    start = time.perf_counter()
+    # disable=None: the bar shows on a terminal only, so logs and pipes get no carriage returns
+    with tqdm(
+        total=None, unit="chunk", file=sys.stderr, desc="survey", leave=False, disable=None
+    ) as bar:
+
+        def progress(finished: int, total: int) -> None:
+            fault_pause("compute")
+            bar.total = total
+            bar.update(finished - bar.n)
+
+        result = run_survey(
+            args.robots,
+            samples=args.samples,
+            seed=args.seed,
+            floating=args.floating,
+            chunk_size=args.chunk_size,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=progress,
+            trajectories=trajectories,
+        )
+    return result, time.perf_counter() - start

@@ -39,11 +39,13 @@ from gimwatch.denoc.compiled import add_shift_congruence, cross3
 
 __all__ = [
     "configure",
+    "factor_shifted",
     "forward_dynamics",
     "gim_diagonal",
     "gim_product",
     "gim_solve",
     "inverse_dynamics",
+    "kinematics",
 ]
 
 _ORIGIN, _REACH, _AXIS, _COM, _OMEGA = 0, 1, 2, 3, 4
@@ -144,18 +146,20 @@ def _kinematics(q, index, geometry, floating, rot, vec, block):
     _poses(q, index, geometry, floating, rot, vec)
     n = index.shape[0]
     ic = np.empty((3, 3))
+    rim = np.empty((3, 3))
     for i in range(0 if floating else 1, n):
         g = geometry[i]
         r = rot[i]
         for a in range(3):
             vec[i, _COM, a] = r[a, 0] * g[16] + r[a, 1] * g[17] + r[a, 2] * g[18]
-        for a in range(3):  # I_c = R I Rᵀ
-            for b in range(3):
-                acc = 0.0
-                for kk in range(3):
-                    for mm in range(3):
-                        acc += r[a, kk] * g[19 + 3 * kk + mm] * r[b, mm]
+        for a in range(3):  # T = R I, then I_c = T Rᵀ (symmetric: upper half, mirrored)
+            for mm in range(3):
+                rim[a, mm] = r[a, 0] * g[19 + mm] + r[a, 1] * g[22 + mm] + r[a, 2] * g[25 + mm]
+        for a in range(3):
+            for b in range(a, 3):
+                acc = rim[a, 0] * r[b, 0] + rim[a, 1] * r[b, 1] + rim[a, 2] * r[b, 2]
                 ic[a, b] = acc
+                ic[b, a] = acc
         m = g[15]
         d = vec[i, _COM]
         dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
@@ -245,11 +249,14 @@ def _solve6(root, rhs, out):
 
 
 @njit(cache=True, error_model="numpy")
-def _factor(index, floating, rot, vec, block, six, scal, root):
-    """Articulated-body factor from the tips: U_i = IA_i p_i, D_i = p_iᵀ U_i, IA passed on.
+def _factor(index, floating, rot, vec, block, six, scal, root, shift):
+    """Articulated-body factor of M − shift·1 from the tips: U_i = IA_i p_i, D_i = p_iᵀ U_i − shift.
 
-    With a floating base the free-flyer's 6×6 system Pᵀ IA_0 P is factored too (UDUᵀ).
-    Returns whether every pivot is positive (False: M(q) is singular).
+    The shift enters the pivots as a (negative) armature would: D_i = p_iᵀ IA_i p_i − shift,
+    IA_i − U_i U_iᵀ / D_i passed on; with a floating base the free-flyer's 6×6 system
+    Pᵀ IA_0 P − shift·1 is factored too (UDUᵀ). The factor is a congruence of M − shift·1
+    (Featherstone's LTDL), so by Sylvester's law of inertia every pivot is positive exactly
+    when shift < λmin(M). Returns whether every pivot is positive.
     """
     n = index.shape[0]
     for i in range(0 if floating else 1, n):
@@ -264,7 +271,7 @@ def _factor(index, floating, rot, vec, block, six, scal, root):
         u = six[i, _U]
         for a in range(6):
             u[a] = art[a, k] * e[0] + art[a, k + 1] * e[1] + art[a, k + 2] * e[2]
-        pivot = _p_dot(kind, e, u)
+        pivot = _p_dot(kind, e, u) - shift
         scal[i, 0] = pivot
         ok = ok and pivot > 0.0
         j = index[i, 0]
@@ -277,6 +284,8 @@ def _factor(index, floating, rot, vec, block, six, scal, root):
         system = np.empty((6, 6))
         columns = np.empty((6, 6))
         _root_system(rot[0], block[0, 1], columns, system)
+        for k in range(6):
+            system[k, k] -= shift
         _udut6(system, root)
         for k in range(6):
             ok = ok and root[6, k] > 0.0
@@ -570,7 +579,23 @@ def configure(q, index, geometry, floating, rot, vec, block, six, scal, root):
     Returns whether M(q) is positive definite (every pivot > 0).
     """
     _kinematics(q, index, geometry, floating, rot, vec, block)
-    return _factor(index, floating, rot, vec, block, six, scal, root)
+    return _factor(index, floating, rot, vec, block, six, scal, root, 0.0)
+
+
+@njit(cache=True)
+def kinematics(q, index, geometry, floating, rot, vec, block):
+    """Poses and body mass matrices at q: all that :func:`gim_product` reads."""
+    _kinematics(q, index, geometry, floating, rot, vec, block)
+
+
+@njit(cache=True)
+def factor_shifted(shift, index, floating, rot, vec, block, six, scal, root):
+    """The articulated factor of M(q) − shift·1 after :func:`kinematics`, for :func:`gim_solve`.
+
+    :func:`gim_solve` then gives (M − shift·1)⁻¹ y. Returns whether every pivot is positive,
+    i.e. (Sylvester's law of inertia) whether shift < λmin(M).
+    """
+    return _factor(index, floating, rot, vec, block, six, scal, root, shift)
 
 
 @njit(cache=True)
@@ -591,7 +616,7 @@ def forward_dynamics(
 ):
     """q̈ = M(q)⁻¹ (τ − C(q, q̇) q̇ + g(q)) into ``out``; False when M(q) is singular."""
     _kinematics(q, index, geometry, floating, rot, vec, block)
-    ok = _factor(index, floating, rot, vec, block, six, scal, root)
+    ok = _factor(index, floating, rot, vec, block, six, scal, root, 0.0)
     moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
     _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out)
     return ok

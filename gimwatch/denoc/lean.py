@@ -141,6 +141,21 @@ class LeanModel:
             self._root,
         )
 
+    def compiled_model_arguments(self) -> tuple:
+        """(index, geometry, floating): the packed tree every compiled recursion reads.
+
+        With :meth:`new_workspace`, for compiled callers that keep their own configured
+        state (the κ tracker factors M − σ·1 in its own buffers, leaving this model's alone).
+        """
+        return self._index, self._geometry, self.floating
+
+    def new_workspace(self) -> tuple:
+        """Fresh buffers (rot, vec, block, six, scal, root) shaped like this model's own."""
+        return tuple(
+            np.zeros_like(a)
+            for a in (self._rot, self._vec, self._block, self._six, self._scal, self._root)
+        )
+
     def gim_product(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """M(q) x at the configured q, O(n)."""
         out = np.empty(self.nv) if out is None else out

@@ -25,6 +25,7 @@ import os
 import re
 import sys
 import tempfile
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cache
@@ -34,8 +35,9 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from gimwatch.errors import InputError, RobotError, URDFError
+from gimwatch.errors import ExampleRobotWarning, InputError, RobotError, URDFError
 from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
+from gimwatch.model.mjcf_values import check_mjcf
 
 __all__ = [
     "EXAMPLE_ROBOT_NOTES",
@@ -137,12 +139,25 @@ def _example_robots() -> dict[str, type]:
 
 #: example-robot-data names whose model, as gimwatch loads it (the URDF file as written, no
 #: reduction), is not what the name or ``example_robot_data.load(name)`` suggests.
+#: ``load_robot`` issues each as one :class:`~gimwatch.errors.ExampleRobotWarning`; the test
+#: ``tests/test_example_robot_loader.py`` compares every name with ``example_robot_data.load``.
+_UR5_AS_UR3 = "example-robot-data 5.0.0 ships a UR5 description under the name ur3"
+_TALOS_ROTORS = (
+    "example_robot_data.load adds rotor inertias from the SRDF (armature = rotor inertia x "
+    "gear ratio^2) to M's diagonal; gimwatch reads the URDF as written, without them"
+)
 EXAMPLE_ROBOT_NOTES = {
-    "ur3": "example-robot-data 5.0.0 ships a UR5 description under the name ur3",
-    "ur3_gripper": "example-robot-data 5.0.0 ships a UR5 description under the name ur3",
-    "ur3_limited": "example-robot-data 5.0.0 ships a UR5 description under the name ur3",
+    "ur3": _UR5_AS_UR3,
+    "ur3_gripper": _UR5_AS_UR3,
+    "ur3_limited": _UR5_AS_UR3,
+    "talos": _TALOS_ROTORS,
+    "talos_box": _TALOS_ROTORS,
+    "talos_arm": _TALOS_ROTORS,
+    "talos_full": _TALOS_ROTORS,
+    "talos_full_box": _TALOS_ROTORS,
     "talos_legs": (
-        "the full 32-DoF Talos URDF; example_robot_data.load locks the upper body (18 DoF)"
+        "the full 32-DoF Talos URDF; example_robot_data.load locks the upper body (18 DoF) "
+        "and adds rotor inertias from the SRDF"
     ),
 }
 
@@ -327,7 +342,8 @@ def _build_mjcf_model(source: str, floating: bool, xml: str) -> pin.Model:
         except Exception as exc:  # boost.python raises RuntimeError, ValueError, ...
             model, failure = None, exc
     if model is None:
-        detail = " ".join(str(failure).split()) or type(failure).__name__
+        # Pinocchio's message starts with its C++ source location; keep what follows.
+        detail = " ".join(str(failure).split("message:")[-1].split()) or type(failure).__name__
         if complaints:
             detail += f" ({complaints[0]})"
         raise URDFError(source, f"Pinocchio cannot read this MJCF: {detail}")
@@ -335,6 +351,7 @@ def _build_mjcf_model(source: str, floating: bool, xml: str) -> pin.Model:
 
 
 def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> Robot:
+    check_mjcf(xml, source)
     model = _build_mjcf_model(source, floating, xml)
     if model.nv == 0:
         raise RobotError(
@@ -393,6 +410,8 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
     elif text in _example_robots():
         path = _example_robot_urdf(text)
         xml, source, name = _read_urdf(path), str(path), text
+        if text in EXAMPLE_ROBOT_NOTES:
+            warnings.warn(f"{text}: {EXAMPLE_ROBOT_NOTES[text]}", ExampleRobotWarning, stacklevel=2)
     elif text.lower().endswith((".urdf", ".xml")) or Path(text).exists() or "/" in text:
         path = Path(text)
         xml, source, name = _read_urdf(path), str(path), path.stem

@@ -226,7 +226,12 @@ def plot_joint_angles(t: npt.ArrayLike, q: npt.ArrayLike, *, names=None, units=N
 
 
 def animate_chain(
-    t: npt.ArrayLike, joint_xy: npt.ArrayLike, kappa: npt.ArrayLike, *, title: str = ""
+    t: npt.ArrayLike,
+    joint_xy: npt.ArrayLike,
+    kappa: npt.ArrayLike,
+    *,
+    title: str = "",
+    fig=None,
 ):
     """A planar chain swinging, coloured by κ₂ on a log scale; returns a FuncAnimation.
 
@@ -235,22 +240,28 @@ def animate_chain(
         joint_xy: Joint and tip positions in the plane of motion, shape (K, n + 1, 2).
         kappa: κ₂ at each frame, shape (K,).
         title: Figure title.
+        fig: The (empty) figure to draw on; None: a new pyplot figure (the caller closes it).
     """
-    import matplotlib.pyplot as plt
+    import matplotlib
     from matplotlib.animation import FuncAnimation
+    from matplotlib.cm import ScalarMappable
     from matplotlib.colors import LogNorm
 
     points = np.asarray(joint_xy)
     kappa = np.asarray(kappa)
     norm = LogNorm(vmin=kappa.min(), vmax=kappa.max())
-    cmap = plt.get_cmap("viridis")
-    fig, ax = plt.subplots(figsize=(5, 5), layout="constrained")
+    cmap = matplotlib.colormaps["viridis"]
+    if fig is None:
+        import matplotlib.pyplot as plt
+
+        fig = plt.figure(figsize=(5, 5), layout="constrained")
+    ax = fig.subplots()
     reach = np.abs(points).max() * 1.05
     ax.set(xlim=(-reach, reach), ylim=(-reach, reach * 0.3), aspect="equal")
     ax.set(xlabel="x [m]", ylabel="y [m]", title=title)
     (line,) = ax.plot([], [], "o-", lw=3, ms=3)
     label = ax.text(0.02, 0.95, "", transform=ax.transAxes)
-    fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="κ₂ [-]", shrink=0.6)
+    fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="κ₂ [-]", shrink=0.6)
 
     def draw(k):
         line.set_data(points[k, :, 0], points[k, :, 1])

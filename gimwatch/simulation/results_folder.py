@@ -9,34 +9,27 @@ Layout of ``DIR``::
                      energy drift (conservative scenes), estimator quality, alarms
     *.png            joint coordinates, watched metrics, energy drift
 
-The folder is built next to ``DIR`` under a temporary name and renamed into place, so a
-failed or interrupted write never leaves a half-written folder, and an existing good
-result is replaced only by a complete one.
+plus the marker ``.gimwatch-results.json``. The folder is built beside ``DIR`` and swapped
+into place (:mod:`gimwatch.output.folders`), so a failed or interrupted write never leaves a
+half-written folder, an existing good result is replaced only by a complete one, and a folder
+of other files is never replaced.
 """
 
 from __future__ import annotations
 
-import os
-import shutil
-import tempfile
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from gimwatch.errors import OutputError
 from gimwatch.metrics.watch import estimator_quality
-from gimwatch.output.atomic import (
-    prepare_directory,
-    write_json_atomic,
-    write_npz_atomic,
-    write_text_atomic,
-)
+from gimwatch.output.atomic import write_json_atomic, write_npz_atomic, write_text_atomic
 from gimwatch.output.environment import versions
+from gimwatch.output.folders import ResultsFolder
 from gimwatch.simulation.simulate import Trajectory
 
-__all__ = ["summarize", "versions", "write_simulation"]
+__all__ = ["summarize", "versions", "write_simulation", "write_simulation_files"]
 
 
 def summarize(trajectory: Trajectory) -> dict[str, Any]:
@@ -174,59 +167,42 @@ def _plots(trajectory: Trajectory, folder: Path) -> None:
         save("diagonal.png", lambda ax: plots.plot_diagonal(wt, watch["watch_diagonal"], ax=ax))
 
 
-def write_simulation(trajectory: Trajectory, directory: str | Path, *, plots: bool = True) -> Path:
-    """Write the results folder of ``trajectory`` to ``directory`` (replaced atomically)."""
-    directory = Path(directory).resolve()
-    if directory.exists() and not directory.is_dir():
-        raise OutputError(str(directory), "is a file, not a folder; give a folder name")
-    prepare_directory(directory.parent)
-    try:
-        staging = Path(tempfile.mkdtemp(prefix=f".{directory.name}.", dir=directory.parent))
-    except OSError as exc:
-        raise OutputError(str(directory), f"cannot be created ({exc.strerror or exc})") from exc
-    try:
-        arrays = {"t": trajectory.t, "q": trajectory.q, "v": trajectory.v, **trajectory.watch}
-        if trajectory.energy is not None:
-            arrays["energy"] = trajectory.energy
-        write_npz_atomic(staging / "trajectory.npz", arrays)
-        names = list(trajectory.dof_names)
-        nq = trajectory.q.shape[1]
-        q_names = names if nq == len(names) else [f"q{i}" for i in range(nq)]
-        header = ["t", *(f"q:{n}" for n in q_names), *(f"v:{n}" for n in names)]
+def write_simulation_files(trajectory: Trajectory, folder: Path, *, plots: bool = True) -> None:
+    """Write the files of the results folder of ``trajectory`` into the existing ``folder``."""
+    arrays = {"t": trajectory.t, "q": trajectory.q, "v": trajectory.v, **trajectory.watch}
+    if trajectory.energy is not None:
+        arrays["energy"] = trajectory.energy
+    write_npz_atomic(folder / "trajectory.npz", arrays)
+    names = list(trajectory.dof_names)
+    nq = trajectory.q.shape[1]
+    q_names = names if nq == len(names) else [f"q{i}" for i in range(nq)]
+    header = ["t", *(f"q:{n}" for n in q_names), *(f"v:{n}" for n in names)]
+    write_text_atomic(
+        folder / "trajectory.csv",
+        _csv(header, [trajectory.t, *trajectory.q.T, *trajectory.v.T]),
+    )
+    scalar = {k: v for k, v in trajectory.watch.items() if k != "watch_t" and v.ndim == 1}
+    if scalar:
         write_text_atomic(
-            staging / "trajectory.csv",
-            _csv(header, [trajectory.t, *trajectory.q.T, *trajectory.v.T]),
+            folder / "watch.csv",
+            _csv(
+                ["t", *(k.removeprefix("watch_") for k in scalar)],
+                [trajectory.watch["watch_t"], *scalar.values()],
+            ),
         )
-        scalar = {k: v for k, v in trajectory.watch.items() if k != "watch_t" and v.ndim == 1}
-        if scalar:
-            write_text_atomic(
-                staging / "watch.csv",
-                _csv(
-                    ["t", *(k.removeprefix("watch_") for k in scalar)],
-                    [trajectory.watch["watch_t"], *scalar.values()],
-                ),
-            )
-        write_json_atomic(staging / "summary.json", summarize(trajectory))
-        if plots and trajectory.t.size:
-            _plots(trajectory, staging)
-        os.chmod(staging, 0o755)
-        if directory.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{directory.name}.old.", dir=directory.parent))
-            os.replace(directory, old / "previous")
-            try:
-                os.replace(staging, directory)
-            except BaseException:  # put the previous result back
-                os.replace(old / "previous", directory)
-                old.rmdir()
-                raise
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(staging, directory)
-    except BaseException as exc:
-        shutil.rmtree(staging, ignore_errors=True)
-        if isinstance(exc, OutputError):  # name the folder, not its staging copy
-            raise OutputError(str(directory), exc.problem) from exc
-        if isinstance(exc, OSError):
-            raise OutputError(str(directory), f"cannot be written ({exc.strerror or exc})") from exc
-        raise
-    return directory
+    write_json_atomic(folder / "summary.json", summarize(trajectory))
+    if plots and trajectory.t.size:
+        _plots(trajectory, folder)
+
+
+def write_simulation(trajectory: Trajectory, directory: str | Path, *, plots: bool = True) -> Path:
+    """Write the results folder of ``trajectory`` to ``directory`` (replaced atomically).
+
+    Raises:
+        OutputError: ``directory`` is not a gimwatch results folder and not empty, is not a
+            folder, is being written by another process, or cannot be written; the previous
+            folder is then left as it was.
+    """
+    with ResultsFolder(directory, writer="simulate") as folder:
+        write_simulation_files(trajectory, folder.staging, plots=plots)
+        return folder.commit()

@@ -1,7 +1,8 @@
 """Write a survey result (:class:`~gimwatch.survey.run.SurveyResult`): report, JSON, CSV, plots.
 
-Every file is written atomically (temporary name, then rename), so an interrupted or failed
-run never leaves half a file; an interrupted survey is written too, and says so.
+The folder is written beside its place and swapped in whole (:mod:`gimwatch.output.folders`),
+so an interrupted or failed write leaves the previous survey as it was, never a mix of two;
+an interrupted survey is written too, and says so.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 
 from gimwatch.output.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from gimwatch.output.environment import cpu_model, versions
+from gimwatch.output.folders import ResultsFolder
 from gimwatch.survey.plots import plot_kappa_vs_delta, plot_kappa_vs_delta_grid
 from gimwatch.survey.run import DOF_METRICS, METRICS, RobotSurvey, SurveyResult
 from gimwatch.survey.trajectory import TrajectoryStatistics
@@ -363,15 +365,19 @@ def write_survey(
     """
     from matplotlib.figure import Figure  # no pyplot: leaves the user's backend alone
 
-    output = Path(output)
-    fig = Figure(figsize=(8, 6), layout="constrained")
-    plot_kappa_vs_delta(result, ax=fig.subplots())
-    write_bytes_atomic(output / SCATTER_PNG, _png(fig))
-    count = max(len(result.robots), 1)
-    columns = min(6, count)
-    grid = Figure(figsize=(2.6 * columns, 2.3 * math.ceil(count / columns) + 0.6))
-    write_bytes_atomic(output / GRID_PNG, _png(plot_kappa_vs_delta_grid(result, fig=grid)))
-    write_json_atomic(output / "survey.json", survey_record(result, wall_time_s=wall_time_s))
-    write_text_atomic(output / "survey.csv", _csv_text(result))
-    write_text_atomic(output / "table.md", readme_table(result))
-    return write_text_atomic(output / "report.md", _report(result, wall_time_s))
+    with ResultsFolder(output, writer="survey") as folder:
+        staging = folder.staging
+        fig = Figure(figsize=(8, 6), layout="constrained")
+        plot_kappa_vs_delta(result, ax=fig.subplots())
+        write_bytes_atomic(staging / SCATTER_PNG, _png(fig))
+        count = max(len(result.robots), 1)
+        columns = min(6, count)
+        grid = Figure(figsize=(2.6 * columns, 2.3 * math.ceil(count / columns) + 0.6))
+        write_bytes_atomic(staging / GRID_PNG, _png(plot_kappa_vs_delta_grid(result, fig=grid)))
+        record = survey_record(result, wall_time_s=wall_time_s)
+        write_json_atomic(staging / "survey.json", record)
+        write_text_atomic(staging / "survey.csv", _csv_text(result))
+        write_text_atomic(staging / "table.md", readme_table(result))
+        write_text_atomic(staging / "report.md", _report(result, wall_time_s))
+        folder.commit()
+    return Path(output) / "report.md"

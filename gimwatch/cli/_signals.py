@@ -1,0 +1,145 @@
+"""SIGINT and SIGTERM in the command line: a latch, and exit statuses 130 and 143.
+
+While :data:`LATCH` is installed (for the length of :func:`gimwatch.cli.main`), SIGINT
+(Ctrl-C) and SIGTERM raise :class:`KeyboardInterrupt` where Python code runs, so every
+command stops as on Ctrl-C and keeps what it computed. Inside :meth:`SignalLatch.deferred`
+a signal is only noted:
+
+* ``"hard"`` (compiled code runs: numba's DeNOC recursions and their compilation, where an
+  exception raised from a signal handler ends in a ``SystemError``): every signal is noted
+  and :meth:`SignalLatch.check` raises at the next safe point, between integrator steps;
+* ``"soft"`` (a results folder is being written): the first signal is noted and the write
+  completes; a second one raises, and the folder is left as it was.
+
+The exit status says which signal came first: 130 for SIGINT, 143 for SIGTERM (128 + N).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+
+__all__ = ["LATCH", "SignalLatch", "exit_status", "fault_pause"]
+
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+def exit_status(signum: int | None) -> int:
+    """128 + the signal's number: 130 for SIGINT (and a plain Ctrl-C), 143 for SIGTERM."""
+    return 128 + int(signum if signum is not None else signal.SIGINT)
+
+
+class SignalLatch:
+    """Turns SIGINT and SIGTERM into :class:`KeyboardInterrupt`, or notes them while deferred.
+
+    Attributes:
+        signum: The first signal received since :meth:`install`, or None.
+        pending: A noted signal has not raised yet.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self.pending = False
+        self._mode: str | None = None
+        self._previous: dict[int, object] = {}
+
+    def install(self) -> bool:
+        """Install the handlers (main thread only); False when they could not be installed.
+
+        A signal the process ignores (SIGINT in a background job) stays ignored.
+        """
+        self.signum, self.pending, self._mode = None, False, None
+        if threading.current_thread() is not threading.main_thread() or self._previous:
+            return False
+        for signum in _SIGNALS:
+            current = signal.getsignal(signum)
+            if current is signal.SIG_IGN:
+                continue
+            self._previous[signum] = current
+            signal.signal(signum, self._handle)
+        return True
+
+    def uninstall(self) -> None:
+        """Put back the handlers found by :meth:`install`."""
+        for signum, handler in self._previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
+        self._previous.clear()
+
+    def _handle(self, signum: int, frame: object) -> None:
+        if self.signum is None:
+            self.signum = signum
+        if self._mode == "hard" or (self._mode == "soft" and not self.pending):
+            self.pending = True
+            return
+        self.pending = False
+        raise KeyboardInterrupt
+
+    @contextmanager
+    def deferred(self, mode: str = "soft") -> Iterator[None]:
+        """Note signals instead of raising while the block runs (``"soft"`` or ``"hard"``)."""
+        previous, self._mode = self._mode, mode
+        try:
+            yield
+        finally:
+            self._mode = previous
+
+    def check(self) -> None:
+        """Raise :class:`KeyboardInterrupt` if a noted signal has not raised yet."""
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
+
+    def checking(self, progress: Callable[[float], object]) -> Callable[[float], object]:
+        """``progress`` preceded by :meth:`check`: a safe point between integrator steps."""
+
+        def checked(fraction: float) -> object:
+            self.check()
+            return progress(fraction)
+
+        return checked
+
+    @property
+    def exit_status(self) -> int:
+        """130 (SIGINT) or 143 (SIGTERM): the status for the first signal received."""
+        return exit_status(self.signum)
+
+
+#: The command line's latch.
+LATCH = SignalLatch()
+
+
+_paused: set[str] = set()
+
+
+def fault_pause(phase: str) -> None:
+    """Test hook: with ``GIMWATCH_FAULT_PAUSE=phase``, stop here until a signal arrives.
+
+    Prints ``gimwatch: paused at PHASE`` on stderr, waits (at most a minute) for SIGINT or
+    SIGTERM, then delivers it to the handler in place, as if it had arrived at this point.
+    Fault tests use it to signal a command at a chosen moment: ``import`` (before the
+    command's modules are imported), ``compute`` (after the first step or chunk), ``write``
+    (the files are in the staging folder), ``swap`` (the new folder is in place, the
+    previous one not yet deleted); ``startup`` is in :mod:`gimwatch.__main__`.
+    """
+    if os.environ.get("GIMWATCH_FAULT_PAUSE") != phase or phase in _paused:
+        return
+    _paused.add(phase)
+    if threading.current_thread() is not threading.main_thread():
+        return
+    received: list[int] = []
+    previous = {s: signal.signal(s, lambda n, _: received.append(n)) for s in _SIGNALS}
+    try:
+        print(f"gimwatch: paused at {phase}", file=sys.stderr, flush=True)
+        deadline = time.monotonic() + 60.0
+        while not received and time.monotonic() < deadline:
+            time.sleep(0.005)
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
+        for signum in received:
+            signal.raise_signal(signum)

@@ -1,0 +1,445 @@
+"""Results folders that never destroy what gimwatch did not write.
+
+A results folder holds a marker file, :data:`MARKER`, naming the command that wrote it and
+the entries it wrote. :class:`ResultsFolder` writes one:
+
+1. the target is checked: absent, empty, or a folder holding the marker; anything else (a
+   folder of the user's files, a regular file, a device, a FIFO) is refused with an
+   :class:`~gimwatch.errors.OutputError`, before any work;
+2. a lock (``fcntl.flock`` on ``.NAME.gimwatch-lock`` beside the folder) makes a second
+   writer of the same folder refuse at once instead of mixing results;
+3. the files are written into a staging folder beside the target (``.NAME.gimwatch-staging-*``);
+4. :meth:`ResultsFolder.commit` writes the marker, links into the staging folder the entries
+   of the previous folder that gimwatch did not write (the user's notes, another command's
+   sub-folders), then swaps the two folders in one step (``renameat2(RENAME_EXCHANGE)`` on
+   Linux, two renames elsewhere) and deletes the previous one.
+
+A reader therefore sees the previous complete folder or the new complete one. SIGINT and
+SIGTERM are held (noted, then re-delivered) while the file system changes state, so a signal
+never leaves a half-swapped folder or a stray staging folder; without a commit, the staging
+folder, the lock and any parent folder created for the target are removed.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import errno
+import fcntl
+import json
+import os
+import secrets
+import shutil
+import stat
+import tempfile
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from types import TracebackType
+
+from gimwatch.errors import OutputError
+from gimwatch.output.atomic import describe_kind, signals_held, write_json_atomic
+
+__all__ = [
+    "MARKER",
+    "Reservation",
+    "ResultsFolder",
+    "check_folder_target",
+    "is_results_folder",
+    "phase_hook",
+    "write_marker",
+]
+
+#: The file that makes a folder a gimwatch results folder.
+MARKER = ".gimwatch-results.json"
+_LOCK, _STAGING, _OLD = ".gimwatch-lock", ".gimwatch-staging-", ".gimwatch-old-"
+_RENAME_EXCHANGE, _AT_FDCWD = 2, -100
+
+
+#: Called with the name of each phase of a write (``"write"``: the files are in the staging
+#: folder; ``"swap"``: the new folder is in place, the previous one not yet deleted). The
+#: command line sets it for its fault tests (``GIMWATCH_FAULT_PAUSE``).
+phase_hook: Callable[[str], None] | None = None
+
+
+def _phase(name: str) -> None:
+    if phase_hook is not None:
+        phase_hook(name)
+
+
+def _problem(exc: OSError) -> str:
+    return f"cannot be written ({exc.strerror or exc})"
+
+
+def is_results_folder(path: str | Path) -> bool:
+    """True when ``path`` is a folder holding the :data:`MARKER` file."""
+    marker = Path(path) / MARKER
+    try:
+        return stat.S_ISREG(os.lstat(marker).st_mode)
+    except OSError:
+        return False
+
+
+def _written_by_gimwatch(folder: Path) -> set[str]:
+    """The entries the marker of ``folder`` lists (none when it cannot be read)."""
+    try:
+        record = json.loads((folder / MARKER).read_text(encoding="utf-8"))
+        return {str(name) for name in record.get("files", [])}
+    except (OSError, ValueError, AttributeError):
+        return set()
+
+
+def write_marker(folder: Path, writer: str, files: Iterable[str] | None = None) -> Path:
+    """Write the :data:`MARKER` of ``folder``: its writer and the entries it wrote.
+
+    Args:
+        folder: The folder.
+        writer: The command that wrote it (``"simulate"``, ``"survey"``, ...).
+        files: The entries gimwatch wrote; default: every entry now in ``folder``.
+    """
+    if files is None:
+        files = {p.name for p in folder.iterdir()} - {MARKER}
+    record = {"format": "gimwatch-results/1", "writer": writer, "files": sorted(files)}
+    return write_json_atomic(folder / MARKER, record)
+
+
+def check_folder_target(path: str | Path) -> Path:
+    """The absolute path (symbolic links resolved) that a results folder may be written to.
+
+    Raises:
+        OutputError: ``path`` exists and is not a folder, or is a folder that is neither
+            empty nor a gimwatch results folder.
+    """
+    target = Path(os.path.realpath(os.path.abspath(path)))
+    try:
+        mode = os.lstat(target).st_mode
+    except FileNotFoundError:
+        return target
+    except NotADirectoryError as exc:  # a file where a parent folder should be
+        for parent in target.parents:
+            if parent.exists() and not parent.is_dir():
+                raise OutputError(
+                    str(parent), "is a file, not a folder; give a folder name"
+                ) from exc
+        raise OutputError(str(path), _problem(exc)) from exc
+    except OSError as exc:
+        raise OutputError(str(path), _problem(exc)) from exc
+    if stat.S_ISLNK(mode):
+        raise OutputError(str(path), "is a symbolic link that cannot be resolved (a loop?)")
+    if stat.S_ISREG(mode):
+        raise OutputError(str(path), "is a file, not a folder; give a folder name")
+    if not stat.S_ISDIR(mode):
+        raise OutputError(
+            str(path), f"is a {describe_kind(mode)}, not a folder; give a folder name"
+        )
+    if not is_results_folder(target):
+        try:
+            empty = not any(os.scandir(target))
+        except OSError as exc:
+            raise OutputError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
+        if not empty:
+            raise OutputError(
+                str(path),
+                f"is a folder that is not empty and not a gimwatch results folder (no {MARKER}); "
+                "nothing was written: give a new or empty folder",
+            )
+    return target
+
+
+class _Lock:
+    """An exclusive ``flock`` on ``.NAME.gimwatch-lock`` beside a results folder."""
+
+    def __init__(self, target: Path, shown: str) -> None:
+        self.path = target.parent / f".{target.name}{_LOCK}"
+        while True:
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            except OSError as exc:
+                raise OutputError(shown, _problem(exc)) from exc
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                holder = os.read(fd, 32).decode(errors="replace").strip()
+                os.close(fd)
+                if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN):
+                    raise OutputError(shown, _problem(exc)) from exc
+                who = f" (pid {holder})" if holder.isdigit() else ""
+                raise OutputError(
+                    shown,
+                    f"is being written by another gimwatch process{who}; "
+                    "nothing was written: wait for it to finish or give another folder",
+                ) from None
+            try:  # the holder before us may have removed the file after we opened it
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+        self.fd = fd
+
+    def release(self) -> None:
+        """Remove the lock file, then unlock (in this order: see the loop above)."""
+        try:
+            os.unlink(self.path)
+        except OSError:
+            pass
+        os.close(self.fd)
+
+
+#: Folders this process holds: target -> [lock, holders, parents created for it].
+_HELD: dict[Path, list] = {}
+
+
+def _make_parents(folder: Path, shown: str) -> list[Path]:
+    """Create ``folder`` and its missing parents; return those created, outermost first."""
+    missing = []
+    while not folder.exists():
+        missing.append(folder)
+        if folder.parent == folder:
+            break
+        folder = folder.parent
+    created = []
+    for path in reversed(missing):
+        try:
+            path.mkdir()
+        except OSError as exc:
+            _remove_parents(created)
+            raise OutputError(shown, _problem(exc)) from exc
+        created.append(path)
+    return created
+
+
+def _remove_parents(created: list[Path]) -> None:
+    for path in reversed(created):
+        try:
+            path.rmdir()
+        except OSError:
+            break
+
+
+class Reservation:
+    """Hold the right to write the results folder ``path``: checked, parents made, locked.
+
+    Re-entrant within a process (a command reserves its folder before computing; the
+    writer it calls reserves it again). On leaving without a commit, the parents created
+    for it are removed again (when empty).
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.shown = str(path)
+        self.target = check_folder_target(path)
+        self.committed = False
+
+    def __enter__(self) -> Reservation:
+        with signals_held():
+            held = _HELD.get(self.target)
+            if held is not None:
+                held[1] += 1
+                return self
+            created = _make_parents(self.target.parent, self.shown)
+            try:
+                lock = _Lock(self.target, self.shown)
+            except BaseException:
+                _remove_parents(created)
+                raise
+            _HELD[self.target] = [lock, 1, created]
+        try:
+            check_folder_target(self.target)  # it may have changed before we held the lock
+        except BaseException:
+            self.__exit__(None, None, None)
+            raise
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        with signals_held():
+            held = _HELD[self.target]
+            held[1] -= 1
+            if self.committed:
+                held[2] = []  # the parents now hold a result: keep them
+            if held[1] == 0:
+                del _HELD[self.target]
+                held[0].release()
+                if not self.target.exists():
+                    _remove_parents(held[2])
+
+
+class ResultsFolder(Reservation):
+    """Write a results folder through a staging folder; :meth:`commit` puts it in place.
+
+    Example::
+
+        with ResultsFolder("out", writer="simulate") as folder:
+            (folder.staging / "summary.json").write_text("{}")
+            folder.commit()
+
+    Args:
+        path: The results folder.
+        writer: The command writing it (recorded in the marker).
+        keep_previous: Also keep the previous folder's gimwatch entries that this run does
+            not write (``bench`` runs a few sections into a folder of all of them); by
+            default only the entries gimwatch did not write are kept.
+    """
+
+    def __init__(self, path: str | Path, *, writer: str, keep_previous: bool = False) -> None:
+        super().__init__(path)
+        self.writer, self.keep_previous = writer, keep_previous
+        self.staging: Path | None = None
+
+    def __enter__(self) -> ResultsFolder:
+        super().__enter__()
+        with signals_held():
+            try:
+                self.staging = Path(
+                    tempfile.mkdtemp(
+                        prefix=f".{self.target.name}{_STAGING}", dir=self.target.parent
+                    )
+                )
+            except OSError as exc:
+                super().__exit__(None, None, None)
+                raise OutputError(self.shown, _problem(exc)) from exc
+        _remove_stale(self.target, keep=self.staging)
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        with signals_held():
+            if not self.committed and self.staging is not None:
+                shutil.rmtree(self.staging, ignore_errors=True)
+        super().__exit__(kind, exc, tb)
+        staging = str(self.staging)
+        if isinstance(exc, OutputError) and exc.path.startswith(staging):
+            raise OutputError(self.shown, exc.problem) from exc  # name the folder, not its copy
+        if isinstance(exc, OSError) and not isinstance(exc, OutputError):
+            raise OutputError(self.shown, _problem(exc)) from exc
+
+    def commit(self) -> Path:
+        """Put the staging folder in place of the results folder; return the folder's path.
+
+        Raises:
+            OutputError: The folder cannot be written; the previous one is left as it was.
+        """
+        if self.staging is None:
+            raise RuntimeError("commit() outside the with block")
+        _phase("write")
+        try:
+            os.chmod(self.staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
+            written = {p.name for p in self.staging.iterdir()} - {MARKER}
+            previous = self.target if self.target.is_dir() else None
+            ours = _written_by_gimwatch(previous) if previous else set()
+            carried = set()
+            for entry in os.scandir(previous) if previous else ():
+                name = entry.name
+                if name in written or name == MARKER or _is_temporary(name):
+                    continue
+                if name in ours and not self.keep_previous:
+                    continue
+                _carry(Path(entry.path), self.staging / name)
+                carried.add(name)
+            write_marker(self.staging, self.writer, written | (carried & ours))
+            with signals_held():
+                check_folder_target(self.target)
+                _swap(self.staging, self.target)
+                self.committed = True
+                _phase("swap")
+                shutil.rmtree(self.staging, ignore_errors=True)  # now the previous folder
+        except OSError as exc:
+            raise OutputError(self.shown, _problem(exc)) from exc
+        except OutputError as exc:  # name the folder, not its staging copy
+            raise OutputError(self.shown, exc.problem) from exc
+        return self.target
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _is_temporary(name: str) -> bool:
+    return _LOCK in name or _STAGING in name or _OLD in name
+
+
+def _carry(source: Path, destination: Path) -> None:
+    """Rebuild ``source`` at ``destination`` with hard links (copies where links fail)."""
+    mode = os.lstat(source).st_mode
+    if stat.S_ISDIR(mode):
+        os.mkdir(destination)
+        for entry in os.scandir(source):
+            if not _is_temporary(entry.name):
+                _carry(Path(entry.path), destination / entry.name)
+        shutil.copystat(source, destination, follow_symlinks=False)
+    elif stat.S_ISLNK(mode):
+        os.symlink(os.readlink(source), destination)
+    else:
+        try:
+            os.link(source, destination, follow_symlinks=False)
+        except OSError:
+            if not stat.S_ISREG(mode):
+                raise
+            shutil.copy2(source, destination)
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two paths in one step (Linux ``renameat2``); False where that is not available."""
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except (OSError, AttributeError):
+        return False
+    result = renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE)
+    if result == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
+        return False
+    raise OSError(code, os.strerror(code), str(b))
+
+
+def _swap(staging: Path, target: Path) -> None:
+    """Put ``staging`` at ``target``; afterwards ``staging`` holds the previous folder, if any."""
+    if not target.exists():
+        os.rename(staging, target)
+        return
+    if _exchange(staging, target):
+        return
+    old = target.parent / f".{target.name}{_OLD}{secrets.token_hex(4)}"
+    os.rename(target, old)
+    try:
+        os.rename(staging, target)
+    except BaseException:
+        os.rename(old, target)
+        raise
+    os.rename(old, staging)
+
+
+def _remove_stale(target: Path, *, keep: Path) -> None:
+    """Clear what a killed writer of ``target`` left (we hold its lock).
+
+    Its staging folders are removed; a previous folder it had moved aside (the two-rename
+    swap) is put back when nothing took its place, else removed.
+    """
+    prefixes = (f".{target.name}{_STAGING}", f".{target.name}{_OLD}")
+    try:
+        entries = sorted(os.scandir(target.parent), key=lambda e: e.name)
+    except OSError:
+        return
+    for entry in entries:
+        if not entry.name.startswith(prefixes) or Path(entry.path) == keep:
+            continue
+        with signals_held():
+            if _OLD in entry.name and not os.path.lexists(target):
+                try:
+                    os.rename(entry.path, target)
+                    continue
+                except OSError:
+                    pass
+            shutil.rmtree(entry.path, ignore_errors=True)
