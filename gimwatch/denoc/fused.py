@@ -146,18 +146,20 @@ def _kinematics(q, index, geometry, floating, rot, vec, block):
     _poses(q, index, geometry, floating, rot, vec)
     n = index.shape[0]
     ic = np.empty((3, 3))
+    rim = np.empty((3, 3))
     for i in range(0 if floating else 1, n):
         g = geometry[i]
         r = rot[i]
         for a in range(3):
             vec[i, _COM, a] = r[a, 0] * g[16] + r[a, 1] * g[17] + r[a, 2] * g[18]
-        for a in range(3):  # I_c = R I Rᵀ
-            for b in range(3):
-                acc = 0.0
-                for kk in range(3):
-                    for mm in range(3):
-                        acc += r[a, kk] * g[19 + 3 * kk + mm] * r[b, mm]
+        for a in range(3):  # T = R I, then I_c = T Rᵀ (symmetric: upper half, mirrored)
+            for mm in range(3):
+                rim[a, mm] = r[a, 0] * g[19 + mm] + r[a, 1] * g[22 + mm] + r[a, 2] * g[25 + mm]
+        for a in range(3):
+            for b in range(a, 3):
+                acc = rim[a, 0] * r[b, 0] + rim[a, 1] * r[b, 1] + rim[a, 2] * r[b, 2]
                 ic[a, b] = acc
+                ic[b, a] = acc
         m = g[15]
         d = vec[i, _COM]
         dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]

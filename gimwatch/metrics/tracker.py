@@ -18,7 +18,7 @@ end (κ to about 2·rtol; default rtol = 1e-10).
   and the factor redone; s = 1 is the plain M⁻¹). Lanczos on (M − σ·1)⁻¹ sees λmin as
   θ = 1/(λmin − σ), separated from the next by (λ₂ − σ)/(λmin − σ) — a factor of hundreds
   where λmin and λ₂ of a long chain differ by 0.07 % — and λmin = σ + 1/θ keeps its relative
-  accuracy (κ ~ 1e11 at n = 400). s follows the observed motion of λmin (3× the last
+  accuracy (κ ~ 1e11 at n = 400). s follows the observed motion of λmin (10× the last
   relative change, at least 1e-8).
 * **λmin**, on other providers (Pinocchio's ABA, test operators): Lanczos on M⁻¹·y with a
   block of 8 Ritz vectors (the smallest eigenvalues of a long chain cluster; Rayleigh–Ritz

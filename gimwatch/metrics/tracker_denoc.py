@@ -23,10 +23,11 @@ from gimwatch.metrics.tracker_krylov import Workspace, leading
 
 __all__ = ["DenocEnds", "warm_sample"]
 
-_CHECK_EVERY = 2  # products between Rayleigh–Ritz checks: shift-invert converges in a few
+_CHECK_EVERY = 1  # products between Rayleigh–Ritz checks (a check costs far less than a product)
+_MARGIN = 10.0  # s = _MARGIN × the last relative change of λmin
 _SHIFT_MIN = 1e-8  # smallest relative shift margin s: above λmin's own tolerance
-_SHIFT_COLD = 1e-5  # s after a cold estimate of λmin to 1e-7
-_LOOSE = 1e-7  # tolerance of the cold start's first, unshifted estimate of λmin
+_ROUND = 12  # products per round of the cold start's shift refinement
+_APPROACH = 0.1  # each round moves σ to λ − 0.1 (λ − σ), λ the round's Ritz estimate
 _PROBES = 16  # seeded probe vectors, used in turn
 
 
@@ -83,7 +84,7 @@ def warm_sample(
         0, starts_max, keep + 1, 0.0, rtol, budget, keep, _CHECK_EVERY, V, AV, H, vectors,
         starts_max, model,
     )  # fmt: skip
-    s = max(3.0 * state[2], _SHIFT_MIN)
+    s = max(_MARGIN * state[2], _SHIFT_MIN)
     sigma, factors, definite = _factor_with_margin(state[1], s, model)
     stats[:] = 0.0
     stats[0], stats[1], stats[2], stats[3] = top, e_top, ok_top, n_top
@@ -167,16 +168,40 @@ class DenocEnds:
         return self._leading(end, starts, sigma, rtol, budget, end)
 
     def _cold_low(self, tracker) -> tuple[float, float, bool, int, int]:
-        """λmin from a cold start: to 1e-7 on M⁻¹, then shift-invert to the tolerance."""
-        sigma, factors, definite = _factor_with_margin(1.0, 1.0, self._model)
-        if not definite:
+        """λmin from a cold start, by shift-invert with a shift refined round after round.
+
+        Round k runs :data:`_ROUND` products of Lanczos on (M − σ·1)⁻¹ from the current Ritz
+        block and a probe; its Ritz value gives λ = σ + 1/θ ≥ λmin (θ ≤ the largest
+        eigenvalue of the operator). The next shift is λ − 0.1 (λ − σ); when a pivot of
+        M − σ·1 is not positive, λmin < σ (Sylvester), and σ is halved back towards the last
+        shift that factored. As σ nears λmin, λmin's eigenvalue of (M − σ·1)⁻¹ separates from
+        the cluster above it and the rounds converge to the tolerance.
+        """
+        if not fused.factor_shifted(0.0, *self._model):
             raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
-        theta, _, _, used = self._cold(1, 0.0, _LOOSE, tracker.max_products)
-        sigma, more, _ = _factor_with_margin(1.0 / theta, _SHIFT_COLD, self._model)
-        theta, estimate, ok, extra = self._leading(
-            1, self._starts[1], sigma, tracker.rtol, tracker.max_products, 1
-        )
-        return sigma + 1.0 / theta, estimate, ok, used + extra, factors + more
+        sigma, factors, used = 0.0, 1, 0
+        starts = np.vstack([self._probe(), self._starts[1][:-1]]) if self.sampled else None
+        if starts is None:
+            starts = self._probe()[None]
+        while True:
+            budget = min(_ROUND, tracker.max_products - used)
+            theta, estimate, ok, spent = self._leading(1, starts, sigma, tracker.rtol, budget, 1)
+            used += spent
+            low = sigma + 1.0 / theta
+            if ok or used >= tracker.max_products:
+                return low, estimate, ok, used, factors
+            safe, trial = sigma, low - _APPROACH * (low - sigma)
+            while trial - safe > 1e-3 * (low - safe):
+                factors += 1
+                if fused.factor_shifted(trial, *self._model):
+                    break
+                trial = 0.5 * (safe + trial)
+            else:
+                factors += 1
+                fused.factor_shifted(safe, *self._model)
+                trial = safe
+            sigma = trial
+            starts = np.vstack([self._probe(), self._starts[1][:-1]])
 
     def sample(self, q: np.ndarray, tracker) -> list:
         """[(λmax, products, fallback, estimate), (λmin, …), factorizations] at q.
