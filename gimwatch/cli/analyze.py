@@ -3,27 +3,17 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import InputError
-from gimwatch.metrics.dense_analysis import analyze_configuration
-from gimwatch.model.configuration import user_configuration
-from gimwatch.model.robots import (
-    DATA_NV_LIMIT,
-    load_robot,
-    neutral_configuration,
-    parse_chain_spec,
-    random_configurations,
-)
+from gimwatch.metrics.analyze import analyze, choose_path
+from gimwatch.model.robots import DATA_NV_LIMIT
 
 NAME = "analyze"
 #: More configurations than this would print a table nobody reads; use ``survey``.
 MAX_RANDOM = 100_000
-#: The O(n) path's largest chain: diag, pivots and κ stay O(n) (about 1 kB per link).
-LINEAR_NV_LIMIT = 200_000
 HELP = "conditioning of M(q): kappa, diagonal ratio, pivot ratios, spectrum"
 #: ``--csv`` columns, one row per configuration (vectors ``;``-separated).
 CSV_COLUMNS = (
@@ -78,91 +68,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _configurations(args: argparse.Namespace, nq: int, neutral, draw, robot=None) -> list:
-    if args.random is not None:
-        return list(draw(args.random))
-    if args.q is not None:
-        if robot is not None and robot.nq != robot.nv:  # continuous joints by angle, unit checks
-            if not all(math.isfinite(x) for x in args.q):
-                raise InputError("q", "finite", args.q)
-            return [user_configuration(robot, args.q, key="--q")]
-        if len(args.q) != nq:
-            raise InputError("--q", f"{nq} numbers for {args.robot}", len(args.q))
-        return [args.q]
-    return [neutral]
-
-
-def _run_linear(args: argparse.Namespace, chain, announce: bool) -> list:
-    """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
-    from gimwatch.denoc import DenocModel
-    from gimwatch.metrics.linear_analysis import (
-        LINEAR_METRICS,
-        analyze_linear,
-        chain_configurations,
-    )
-
-    if args.floating:
-        raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
-    metrics = LINEAR_METRICS if args.metrics is None else tuple(args.metrics.split(","))
-    if chain is not None:
-        if chain.n > LINEAR_NV_LIMIT:
-            raise InputError("the N of chain:N", f"at most {LINEAR_NV_LIMIT}", chain.n)
-        model, name = DenocModel.from_chain(chain), chain.name
-        configurations = _configurations(
-            args,
-            chain.n,
-            [0.0] * chain.n,
-            lambda k: chain_configurations(chain, k, seed=args.seed),
-        )
-    else:
-        robot = load_robot(args.robot)
-        model = DenocModel.from_urdf(
-            robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
-        )
-        name = robot.name
-        configurations = _configurations(
-            args,
-            robot.nq,
-            neutral_configuration(robot),
-            lambda k: random_configurations(robot, k, seed=args.seed),
-            robot,
-        )
-    if announce:
-        print(
-            f"gimwatch: {name} has nv = {model.nv} > {DATA_NV_LIMIT}: using the O(n) DeNOC "
-            "path (Pinocchio's Data would need GBs)",
-            file=sys.stderr,
-        )
-    return [
-        analyze_linear(model, q, name=name, metrics=metrics, seed=args.seed) for q in configurations
-    ]
-
-
 def run(args: argparse.Namespace) -> int:
     """Analyse and print."""
     if args.q is not None and args.random is not None:
         raise InputError("--q and --random", "used one at a time", "both")
     if args.random is not None and args.random > MAX_RANDOM:
         raise InputError("--random", f"at most {MAX_RANDOM}", args.random)
-    chain = parse_chain_spec(args.robot)
-    large = chain is not None and not args.floating and chain.n > DATA_NV_LIMIT
-    linear = args.backend == "denoc" or (args.backend == "auto" and large)
+    linear = choose_path(args.robot, floating=args.floating, backend=args.backend) == "denoc"
     if args.metrics is not None and not linear:
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
-    if linear:
-        results = _run_linear(args, chain, announce=args.backend == "auto")
-    else:
-        robot = load_robot(args.robot, floating=args.floating, max_nv=DATA_NV_LIMIT)
-        configurations = _configurations(
-            args,
-            robot.nq,
-            neutral_configuration(robot),
-            lambda k: random_configurations(robot, k, seed=args.seed),
-            robot,
-        )
-        data = robot.new_data()
-        results = [analyze_configuration(robot, q, data=data) for q in configurations]
+    if linear and args.floating:
+        raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
+    analysis = analyze(
+        args.robot,
+        args.q,
+        random=args.random,
+        seed=args.seed,
+        floating=args.floating,
+        backend=args.backend,
+        metrics=None if args.metrics is None else args.metrics.split(","),
+        key="--q",
+    )
+    results = analysis.results
     first = results[0]
+    if analysis.path == "denoc" and analysis.chosen:
+        print(
+            f"gimwatch: {first.robot} has nv = {first.nv} > {DATA_NV_LIMIT}: using the O(n) "
+            "DeNOC path (Pinocchio's Data would need GBs)",
+            file=sys.stderr,
+        )
     base = "floating" if args.floating else "fixed"
     records = [{"config": i, **r.to_dict()} for i, r in enumerate(results)]
     if args.json:

@@ -1,0 +1,173 @@
+"""``analyze``: conditioning of a robot's GIM at configurations, on the path that fits it.
+
+The dense path forms M with Pinocchio's CRBA and gives every metric and the whole spectrum;
+the O(n) path (:mod:`gimwatch.metrics.linear_analysis`) never forms M nor builds a Pinocchio
+Data, whose memory grows as nv³. :func:`choose_path` picks it: above
+:data:`~gimwatch.model.robots.DATA_NV_LIMIT` coordinates a fixed-base generated chain goes
+the O(n) way, everything else the dense way, unless the caller asks for one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gimwatch.errors import InputError
+from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
+from gimwatch.model.configuration import user_configuration
+from gimwatch.model.robots import (
+    DATA_NV_LIMIT,
+    load_robot,
+    neutral_configuration,
+    parse_chain_spec,
+    random_configurations,
+)
+
+__all__ = ["LINEAR_NV_LIMIT", "PATHS", "Analysis", "analyze", "choose_path"]
+
+#: ``backend`` values: ``auto`` lets :func:`choose_path` decide.
+PATHS = ("auto", "crba", "denoc")
+#: The O(n) path's largest chain: diag, pivots and κ stay O(n) (about 1 kB per link).
+LINEAR_NV_LIMIT = 200_000
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """The analyses of one robot, and the path that made them.
+
+    Attributes:
+        results: One :class:`GimAnalysis` per configuration.
+        path: ``"crba"`` (dense M) or ``"denoc"`` (O(n), no M).
+        chosen: True when ``auto`` chose the path (the caller may want to say why).
+    """
+
+    results: tuple[GimAnalysis, ...]
+    path: str
+    chosen: bool
+
+
+def choose_path(spec: str, *, floating: bool = False, backend: str = "auto") -> str:
+    """``"denoc"`` for the O(n) path, ``"crba"`` for the dense one (see the module docstring)."""
+    if backend not in PATHS:
+        raise InputError("backend", f"one of {', '.join(PATHS)}", backend)
+    if backend != "auto":
+        return backend
+    chain = parse_chain_spec(spec)
+    large = chain is not None and not floating and chain.n > DATA_NV_LIMIT
+    return "denoc" if large else "crba"
+
+
+def _configurations(q, random, seed, nq, neutral, draw, robot=None, key="q", spec="") -> list:
+    if q is not None and random is not None:
+        raise InputError(f"{key} and random", "used one at a time", "both")
+    if random is not None:
+        return list(draw(random, seed))
+    if q is None:
+        return [neutral]
+    q = [float(x) for x in q]
+    if robot is not None and robot.nq != robot.nv:  # continuous joints by angle, unit checks
+        if not all(math.isfinite(x) for x in q):
+            raise InputError(key, "finite", q)
+        return [user_configuration(robot, q, key=key)]
+    if len(q) != nq:
+        raise InputError(key, f"{nq} numbers for {spec}", len(q))
+    return [q]
+
+
+def _linear(spec, q, random, seed, metrics, floating, key) -> list[GimAnalysis]:
+    """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
+    from gimwatch.denoc import DenocModel
+    from gimwatch.metrics.linear_analysis import (
+        LINEAR_METRICS,
+        analyze_linear,
+        chain_configurations,
+    )
+
+    if floating:
+        raise InputError("floating", "left out on the O(n) path (fixed bases only)", True)
+    metrics = LINEAR_METRICS if metrics is None else tuple(metrics)
+    chain = parse_chain_spec(spec)
+    if chain is not None:
+        if chain.n > LINEAR_NV_LIMIT:
+            raise InputError("the N of chain:N", f"at most {LINEAR_NV_LIMIT}", chain.n)
+        model, name = DenocModel.from_chain(chain), chain.name
+        qs = _configurations(
+            q,
+            random,
+            seed,
+            chain.n,
+            [0.0] * chain.n,
+            lambda k, s: chain_configurations(chain, k, seed=s),
+            key=key,
+            spec=spec,
+        )
+    else:
+        robot = load_robot(spec)
+        model = DenocModel.from_urdf(
+            robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
+        )
+        name = robot.name
+        qs = _configurations(
+            q,
+            random,
+            seed,
+            robot.nq,
+            neutral_configuration(robot),
+            lambda k, s: random_configurations(robot, k, seed=s),
+            robot,
+            key=key,
+            spec=spec,
+        )
+    return [analyze_linear(model, x, name=name, metrics=metrics, seed=seed) for x in qs]
+
+
+def analyze(
+    spec: str,
+    q: Sequence[float] | None = None,
+    *,
+    random: int | None = None,
+    seed: int = 0,
+    floating: bool = False,
+    backend: str = "auto",
+    metrics: Sequence[str] | None = None,
+    key: str = "q",
+) -> Analysis:
+    """Analyse ``spec`` (``chain:N``, a URDF or MJCF path, an example-robot-data name).
+
+    Args:
+        spec: The robot.
+        q: One configuration as a user writes it (a continuous joint by its angle), or None.
+        random: Analyse this many random configurations within the joint limits instead.
+        seed: Seed of the random configurations (and of Lanczos on the O(n) path).
+        floating: Add a free-flyer base (dense path only).
+        backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see :func:`choose_path`.
+        metrics: On the O(n) path, a subset of its metrics; the dense path computes all.
+        key: The name of ``q`` in error messages (``--q`` for the CLI).
+
+    Returns:
+        The :class:`Analysis`: the results and the path taken.
+    """
+    path = choose_path(spec, floating=floating, backend=backend)
+    if metrics is not None and path != "denoc":
+        raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
+    if path == "denoc":
+        results = _linear(spec, q, random, seed, metrics, floating, key)
+    else:
+        robot = load_robot(spec, floating=floating, max_nv=DATA_NV_LIMIT)
+        qs = _configurations(
+            q,
+            random,
+            seed,
+            robot.nq,
+            neutral_configuration(robot),
+            lambda k, s: random_configurations(robot, k, seed=s),
+            robot,
+            key=key,
+            spec=spec,
+        )
+        data = robot.new_data()
+        results = [analyze_configuration(robot, np.asarray(x), data=data) for x in qs]
+    return Analysis(results=tuple(results), path=path, chosen=backend == "auto")
