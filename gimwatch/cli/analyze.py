@@ -13,6 +13,7 @@ from gimwatch.metrics.dense_analysis import analyze_configuration
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
+    check_random_budget,
     load_robot,
     neutral_configuration,
     parse_chain_spec,
@@ -80,6 +81,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _configurations(args: argparse.Namespace, nq: int, neutral, draw, robot=None) -> list:
     if args.random is not None:
+        check_random_budget(args.random, nq)  # before anything is drawn
         return list(draw(args.random))
     if args.q is not None:
         if robot is not None and robot.nq != robot.nv:  # continuous joints by angle, unit checks

@@ -1,5 +1,7 @@
 """The scene's robot and its initial state: ``robot``/``base`` and ``q``/``v`` resolved.
 
+A robot with a joint that moves no mass at q0 is refused here, naming the URDF and the joint.
+
 Loading failures become a :class:`~gimwatch.errors.SceneError` on key ``robot``; q is read
 in user coordinates (continuous joints by angle, ``q = 0.0``: every angle zero and the
 neutral base; see :mod:`gimwatch.model.configuration`), v in velocity coordinates.
@@ -8,8 +10,10 @@ neutral base; see :mod:`gimwatch.model.configuration`), v in velocity coordinate
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
-from gimwatch.errors import GimwatchError, RobotError, SceneError
+from gimwatch.errors import ConditioningError, GimwatchError, RobotError, SceneError
+from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
@@ -59,4 +63,20 @@ def initial_state(scene, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     if scene.q is not None:
         q0 = joint_vector(robot, scene.q, source=scene.source, key="q", space="q", default=q0)
     v0 = joint_vector(robot, scene.v, source=scene.source, key="v")
+    _check_moving_mass(scene, robot, q0)
     return q0, v0
+
+
+def _check_moving_mass(scene, robot: Robot, q0: np.ndarray) -> None:
+    """Refuse a robot with a joint that moves no mass (M(q0) singular), naming the joint.
+
+    Forward dynamics would divide by zero at t = 0. Skipped above DATA_NV_LIMIT (the O(n)
+    backends of long chains, whose every link has a mass).
+    """
+    if robot.nv > DATA_NV_LIMIT:
+        return
+    M = pin.crba(robot.model, robot.new_data(), q0)
+    try:
+        check_massless(np.diag(M), robot.dof_names, name=robot.name, source=robot.source)
+    except ConditioningError as exc:
+        raise scene.error("robot", str(exc)) from exc
