@@ -86,7 +86,14 @@ class TableReader:
         if nonnegative and value < 0:
             raise self.fail(name, f"must be >= 0, got {value!r}")
         if not minimum <= value <= maximum:
-            raise self.fail(name, f"must be within {minimum:g} .. {maximum:g}, got {value!r}")
+            rule = (
+                f"<= {maximum:g}"
+                if minimum == -math.inf
+                else f">= {minimum:g}"
+                if maximum == math.inf
+                else f"within {minimum:g} .. {maximum:g}"
+            )
+            raise self.fail(name, f"must be {rule}, got {value!r}")
         return value
 
     def integer(self, name: str, default: int, *, minimum: int, maximum: int) -> int:
