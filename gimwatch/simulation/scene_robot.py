@@ -1,6 +1,6 @@
 """The scene's robot and its initial state: ``robot``/``base`` and ``q``/``v`` resolved.
 
-A robot with a joint that moves no mass at q0 is refused here, naming the URDF and the joint.
+A robot with a joint that moves no mass is refused here, naming the URDF and the joint.
 
 Loading failures become a :class:`~gimwatch.errors.SceneError` on key ``robot``; q is read
 in user coordinates (continuous joints by angle, ``q = 0.0``: every angle zero and the
@@ -10,7 +10,6 @@ neutral base; see :mod:`gimwatch.model.configuration`), v in velocity coordinate
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 
 from gimwatch.errors import ConditioningError, GimwatchError, RobotError, SceneError
 from gimwatch.metrics.dense_analysis import check_massless
@@ -63,20 +62,31 @@ def initial_state(scene, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     if scene.q is not None:
         q0 = joint_vector(robot, scene.q, source=scene.source, key="q", space="q", default=q0)
     v0 = joint_vector(robot, scene.v, source=scene.source, key="v")
-    _check_moving_mass(scene, robot, q0)
+    _check_moving_mass(scene, robot)
     return q0, v0
 
 
-def _check_moving_mass(scene, robot: Robot, q0: np.ndarray) -> None:
-    """Refuse a robot with a joint that moves no mass (M(q0) singular), naming the joint.
+def _check_moving_mass(scene, robot: Robot) -> None:
+    """Refuse a robot with a joint that moves no mass (M singular), naming the joint.
 
-    Forward dynamics would divide by zero at t = 0. Skipped above DATA_NV_LIMIT (the O(n)
-    backends of long chains, whose every link has a mass).
+    Forward dynamics would divide by zero at t = 0. Read from the model's inertias (no M is
+    formed): a joint whose subtree has no mass, and for a rotation no rotational inertia
+    either, has M_kk = 0 at every q.
     """
-    if robot.nv > DATA_NV_LIMIT:
-        return
-    M = pin.crba(robot.model, robot.new_data(), q0)
+    model = robot.model
+    mass = [float(body.mass) for body in model.inertias]
+    rotational = [float(np.abs(body.inertia).sum()) for body in model.inertias]
+    for k in range(model.njoints - 1, 0, -1):  # subtree sums, leaves first: O(n)
+        parent = model.parents[k]
+        mass[parent] += mass[k]
+        rotational[parent] += rotational[k]
+    diagonal = []
+    for k in range(1, model.njoints):
+        joint = model.joints[k]
+        prismatic = joint.shortname().startswith(("JointModelP", "JointModelTranslation"))
+        moves = mass[k] > 0 if prismatic else (mass[k] > 0 or rotational[k] > 0)
+        diagonal += [1.0 if moves else 0.0] * joint.nv
     try:
-        check_massless(np.diag(M), robot.dof_names, name=robot.name, source=robot.source)
+        check_massless(np.array(diagonal), robot.dof_names, name=robot.name, source=robot.source)
     except ConditioningError as exc:
         raise scene.error("robot", str(exc)) from exc
