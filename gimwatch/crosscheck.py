@@ -33,6 +33,7 @@ import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
 from gimwatch.errors import InputError, URDFError
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.model.robots import (
     EXAMPLE_ROBOT_NOTES,
     PLACEHOLDER_LIMIT,
@@ -213,7 +214,7 @@ def crosscheck_robot(
         M_ref = _finite(robot, "mass matrix M(q)", upper + np.triu(upper, 1).T)
         eigenvalues = np.linalg.eigvalsh(M_ref)
         rank_deficient = eigenvalues[0] <= robot.nv * _EPS * eigenvalues[-1]
-        kappa = np.inf if rank_deficient else eigenvalues[-1] / eigenvalues[0]
+        kappa = np.inf if rank_deficient else extreme_ratio(eigenvalues)
         kappa_max = max(kappa_max, float(kappa))
         if mj_model is not None:
             from gimwatch.model.mujoco_model import pinocchio_mass_matrix

@@ -25,7 +25,7 @@ LAYERS = {
     "output": 1,
     "model": 2,
     "denoc": 3,
-    "crosscheck": 3,
+    "crosscheck": 4,
     "metrics": 4,
     "simulation": 5,
     "stress": 6,

@@ -365,12 +365,20 @@ def test_latch_notes_signals_while_deferred_and_raises_at_the_check():
             assert latch.pending and latch.signum == signal.SIGTERM
             with pytest.raises(KeyboardInterrupt):
                 latch.check()
+            assert not latch.pending
+            with pytest.raises(KeyboardInterrupt):
+                signal.raise_signal(signal.SIGINT)  # a third signal: the user insists
+        assert latch.exit_status == 143
+    finally:
+        latch.uninstall()
+    assert latch.install()
+    try:
         with latch.deferred("soft"):
             signal.raise_signal(signal.SIGINT)  # the first one is noted
             with pytest.raises(KeyboardInterrupt):
                 signal.raise_signal(signal.SIGINT)  # the second one stops the write
         with pytest.raises(KeyboardInterrupt):
             signal.raise_signal(signal.SIGINT)
-        assert latch.exit_status == 143
+        assert latch.exit_status == 130
     finally:
         latch.uninstall()

@@ -26,7 +26,12 @@ from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import plot_cost_vs_n
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits, time_call
-from gimwatch.metrics.conditioning import condition_estimate_1norm, condition_number, diagonal_ratio
+from gimwatch.metrics.conditioning import (
+    condition_estimate_1norm,
+    condition_number,
+    diagonal_ratio,
+    extreme_ratio,
+)
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
@@ -91,7 +96,7 @@ def run(context: BenchContext) -> SectionResult:
         q = random_configurations(robot, 1, seed=context.seed)[0]
         M = gim(robot, q, data=data)
         values = scipy.linalg.eigvalsh(M)
-        kappa = float(values[-1] / values[0])
+        kappa = extreme_ratio(values)
         for method, fn in _methods(robot, q, data).items():
             context.progress(f"  n = {n}: {method}")
             timing = time_call(fn, repeats=repeats, min_round_s=min_round)

@@ -29,6 +29,7 @@ from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
 from gimwatch.denoc import DenocModel, extreme_eigenvalues
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
 
@@ -125,7 +126,7 @@ def _kappa_table(context: BenchContext, sizes) -> Table:
         start = time.perf_counter()
         values = scipy.linalg.eigvalsh(state.dense())
         seconds = time.perf_counter() - start
-        kappa = values[-1] / values[0] if values[0] > 0 else float("inf")
+        kappa = extreme_ratio(values) if values[0] > 0 else float("inf")
         table.add(
             n=n,
             route="dense_eigvalsh",

@@ -39,6 +39,7 @@ from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.denoc import DenocModel, extreme_eigenvalues
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.metrics.tracker import KappaTracker
 from gimwatch.metrics.watch import Watch
@@ -111,7 +112,7 @@ def _reference(robot, data, qs) -> tuple[np.ndarray, np.ndarray]:
         values = scipy.linalg.eigvalsh(pin.crba(robot.model, data, q), check_finite=False)
         inverse = scipy.linalg.eigvalsh(pin.computeMinverse(robot.model, data, q))
         good.append(values[-1] * inverse[-1])
-        plain.append(values[-1] / values[0])
+        plain.append(extreme_ratio(values))
     return np.array(good), np.array(plain)
 
 

@@ -7,7 +7,8 @@ a signal is only noted:
 
 * ``"hard"`` (compiled code runs: numba's DeNOC recursions and their compilation, where an
   exception raised from a signal handler ends in a ``SystemError``): every signal is noted
-  and :meth:`SignalLatch.check` raises at the next safe point, between integrator steps;
+  and :meth:`SignalLatch.check` raises at the next safe point, between integrator steps
+  (a third signal raises at once: the user insists);
 * ``"soft"`` (a results folder is being written): the first signal is noted and the write
   completes; a second one raises, and the folder is left as it was.
 
@@ -27,6 +28,8 @@ from contextlib import contextmanager
 __all__ = ["LATCH", "SignalLatch", "exit_status", "fault_pause"]
 
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: The signal that raises even while deferred: the user insists (a stuck load, a long step).
+_INSIST = 3
 
 
 def exit_status(signum: int | None) -> int:
@@ -46,6 +49,7 @@ class SignalLatch:
         self.signum: int | None = None
         self.pending = False
         self._mode: str | None = None
+        self._count = 0
         self._previous: dict[int, object] = {}
 
     def install(self) -> bool:
@@ -53,7 +57,7 @@ class SignalLatch:
 
         A signal the process ignores (SIGINT in a background job) stays ignored.
         """
-        self.signum, self.pending, self._mode = None, False, None
+        self.signum, self.pending, self._mode, self._count = None, False, None, 0
         if threading.current_thread() is not threading.main_thread() or self._previous:
             return False
         for signum in _SIGNALS:
@@ -73,7 +77,9 @@ class SignalLatch:
     def _handle(self, signum: int, frame: object) -> None:
         if self.signum is None:
             self.signum = signum
-        if self._mode == "hard" or (self._mode == "soft" and not self.pending):
+        self._count += 1
+        insisted = self._count >= _INSIST
+        if not insisted and (self._mode == "hard" or (self._mode == "soft" and not self.pending)):
             self.pending = True
             return
         self.pending = False

@@ -32,7 +32,9 @@ __all__ = [
     "condition_estimate_1norm",
     "condition_number",
     "diagonal_ratio",
+    "eigenpairs",
     "eigenvalues",
+    "extreme_ratio",
     "ldlt_pivots",
     "pivot_ratio_backward",
     "pivot_ratio_forward",
@@ -98,14 +100,37 @@ def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
     return values
 
 
+def eigenpairs(matrix: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues (ascending) and eigenvectors (columns) of the GIM (SciPy's ``eigh``).
+
+    The eigenvalues are as LAPACK returns them: near κ = 1/eps the smallest may come out
+    ≤ 0, which the caller judges (:func:`eigenvalues` refuses it).
+
+    Raises:
+        ConditioningError: M is not a valid GIM.
+    """
+    import scipy.linalg
+
+    return scipy.linalg.eigh(check_gim(matrix), check_finite=False)
+
+
+def extreme_ratio(values: npt.ArrayLike) -> float:
+    """Max / min of positive numbers: the one ratio behind κ, δ and the pivot ratios.
+
+    κ₂ is the ratio of the extreme eigenvalues (Eq. 6), δ that of the diagonal (Sec. 4), a
+    pivot ratio that of the pivots of Gaussian elimination (Fig. 4).
+    """
+    values = np.asarray(values, dtype=float)
+    return float(values.max() / values.min())
+
+
 def condition_number(matrix: npt.ArrayLike) -> float:
     """κ₂(M) = λmax / λmin (Shah & Saha 2013, Eq. 6).
 
     Round-off limits it: λmin is known only to about eps·λmax, so values near 1/eps
     (~4.5e15) carry no digits.
     """
-    values = eigenvalues(matrix)
-    return float(values[-1] / values[0])
+    return extreme_ratio(eigenvalues(matrix))
 
 
 def _real_array(value: npt.ArrayLike, what: str) -> np.ndarray:
@@ -143,8 +168,7 @@ def diagonal_ratio(matrix_or_diagonal: npt.ArrayLike) -> float:
 
     Since λmin <= M_ii <= λmax, δ is a lower bound of κ₂.
     """
-    diag = _diagonal_of(matrix_or_diagonal)
-    return float(diag.max() / diag.min())
+    return extreme_ratio(_diagonal_of(matrix_or_diagonal))
 
 
 class ScaledDiagonalRatio:
@@ -222,14 +246,12 @@ def udut_pivots(matrix: npt.ArrayLike) -> np.ndarray:
 
 def pivot_ratio_forward(matrix: npt.ArrayLike) -> float:
     """max/min of the LDLᵀ pivots (the paper's Gaussian elimination, Fig. 4)."""
-    pivots = ldlt_pivots(matrix)
-    return float(pivots.max() / pivots.min())
+    return extreme_ratio(ldlt_pivots(matrix))
 
 
 def pivot_ratio_backward(matrix: npt.ArrayLike) -> float:
     """max/min of the UDUᵀ pivots (elimination from the tips, as in Pinocchio and DeNOC)."""
-    pivots = udut_pivots(matrix)
-    return float(pivots.max() / pivots.min())
+    return extreme_ratio(udut_pivots(matrix))
 
 
 def condition_estimate_1norm(matrix: npt.ArrayLike) -> float:

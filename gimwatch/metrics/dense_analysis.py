@@ -9,18 +9,19 @@ import numpy as np
 import numpy.typing as npt
 
 from gimwatch.errors import ConditioningError
-from gimwatch.metrics.conditioning import (
-    check_gim,
-    diagonal_ratio,
-    eigenvalues,
-    ldlt_pivots,
-    udut_pivots,
-    warn_if_ill_conditioned,
-)
+from gimwatch.metrics.conditioning import check_gim, warn_if_ill_conditioned
+from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.inertia import gim
 from gimwatch.model.robots import Robot, as_configuration
 
-__all__ = ["GimAnalysis", "analyze_configuration", "check_massless", "check_robot_gim"]
+__all__ = [
+    "ANALYSIS_METRICS",
+    "GimAnalysis",
+    "analysis_record",
+    "analyze_configuration",
+    "check_massless",
+    "check_robot_gim",
+]
 
 
 @dataclass(frozen=True)
@@ -99,27 +100,59 @@ def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
     return check_gim(M)
 
 
+#: The scalar metrics of a :class:`GimAnalysis`, in its field order (registry names).
+ANALYSIS_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_forward", "pivot_ratio_backward")
+
+
+def analysis_record(
+    state: GimState,
+    metrics: Sequence[str],
+    *,
+    name: str,
+    nv: int,
+    q: npt.ArrayLike,
+    dof_names: Sequence[str],
+    method: str,
+) -> GimAnalysis:
+    """The :class:`GimAnalysis` of one state: the named registry metrics, the others None.
+
+    The spectrum is the full one when M is formed, else (the O(n) path) λmin and λmax.
+    """
+    values = {key: None for key in ANALYSIS_METRICS} | evaluate(metrics, state)
+    diag = state.diag
+    if "kappa" in metrics:
+        warn_if_ill_conditioned(values["kappa"], where=name)
+        lambda_min, lambda_max = state.extremes
+        spectrum = state.eigenvalues if state.linear is None else (lambda_min, lambda_max)
+    else:
+        lambda_min = lambda_max = None
+        spectrum = ()
+    return GimAnalysis(
+        robot=name,
+        nv=nv,
+        q=tuple(float(x) for x in np.asarray(q, dtype=float)),
+        **values,
+        lambda_min=lambda_min,
+        lambda_max=lambda_max,
+        eigenvalues=tuple(float(x) for x in spectrum),
+        diagonal=tuple(float(x) for x in diag),
+        max_diagonal_dof=dof_names[int(np.argmax(diag))],
+        min_diagonal_dof=dof_names[int(np.argmin(diag))],
+        method=method,
+    )
+
+
 def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAnalysis:
-    """Compute κ, δ, both pivot ratios and the spectrum of M(q)."""
+    """Compute κ, δ, both pivot ratios and the spectrum of M(q) (dense M, Pinocchio's CRBA)."""
     q = as_configuration(robot, q)
     M = check_robot_gim(robot, gim(robot, q, data=data))
-    values = eigenvalues(M)
-    diag = np.diag(M)
-    forward, backward = ldlt_pivots(M), udut_pivots(M)
-    kappa = float(values[-1] / values[0])
-    warn_if_ill_conditioned(kappa, where=robot.name)
-    return GimAnalysis(
-        robot=robot.name,
+    state = GimState(robot, data, q, full=True, matrix=M)
+    return analysis_record(
+        state,
+        ANALYSIS_METRICS,
+        name=robot.name,
         nv=robot.nv,
-        q=tuple(float(x) for x in q),
-        kappa=kappa,
-        diagonal_ratio=diagonal_ratio(diag),
-        pivot_ratio_forward=float(forward.max() / forward.min()),
-        pivot_ratio_backward=float(backward.max() / backward.min()),
-        lambda_min=float(values[0]),
-        lambda_max=float(values[-1]),
-        eigenvalues=tuple(float(x) for x in values),
-        diagonal=tuple(float(x) for x in diag),
-        max_diagonal_dof=robot.dof_names[int(np.argmax(diag))],
-        min_diagonal_dof=robot.dof_names[int(np.argmin(diag))],
+        q=q,
+        dof_names=robot.dof_names,
+        method="crba",
     )

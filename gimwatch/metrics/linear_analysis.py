@@ -15,9 +15,10 @@ from collections.abc import Collection
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.denoc import DenocModel, extreme_eigenvalues
+from gimwatch.denoc import DenocModel
 from gimwatch.errors import InputError
-from gimwatch.metrics.dense_analysis import GimAnalysis, check_massless
+from gimwatch.metrics.dense_analysis import GimAnalysis, analysis_record, check_massless
+from gimwatch.metrics.registry import GimState
 from gimwatch.model.chains import ChainSpec
 from gimwatch.suggest import did_you_mean
 
@@ -70,29 +71,15 @@ def analyze_linear(
             unknown,
             hint=did_you_mean(unknown[0], LINEAR_METRICS).removeprefix("; "),
         )
-    state = model.state(q)
-    diag = model.to_public(state.diagonal())
-    check_massless(diag, model.joint_names, name=name, source=model.tree.source)
-    kappa = lambda_min = lambda_max = backward = None
-    if "kappa" in metrics:
-        found = extreme_eigenvalues(state, seed=seed, rtol=rtol)
-        kappa, lambda_min, lambda_max = found.kappa, found.lambda_min, found.lambda_max
-    if "pivot_ratio_backward" in metrics:
-        pivots = state.pivots()
-        backward = float(pivots.max() / pivots.min())
-    return GimAnalysis(
-        robot=name,
+    state = GimState(linear=model.state(q), lanczos=(seed, rtol), to_public=model.to_public)
+    check_massless(state.diag, model.joint_names, name=name, source=model.tree.source)
+    asked = [key for key in LINEAR_METRICS if key in metrics or key == "diagonal_ratio"]
+    return analysis_record(
+        state,
+        asked,
+        name=name,
         nv=model.nv,
-        q=tuple(float(x) for x in np.asarray(q, dtype=float)),
-        kappa=kappa,
-        diagonal_ratio=float(diag.max() / diag.min()),
-        pivot_ratio_forward=None,
-        pivot_ratio_backward=backward,
-        lambda_min=lambda_min,
-        lambda_max=lambda_max,
-        eigenvalues=() if kappa is None else (lambda_min, lambda_max),
-        diagonal=tuple(float(x) for x in diag),
-        max_diagonal_dof=model.joint_names[int(np.argmax(diag))],
-        min_diagonal_dof=model.joint_names[int(np.argmin(diag))],
+        q=q,
+        dof_names=model.joint_names,
         method="denoc-linear",
     )

@@ -43,6 +43,7 @@ import numpy.typing as npt
 import scipy.linalg
 
 from gimwatch.errors import ConditioningError, InputError
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.tracker_denoc import DenocEnds
 from gimwatch.metrics.tracker_krylov import Workspace, leading_python
 
@@ -241,7 +242,7 @@ class KappaTracker:
         if self._denoc is not None:
             self._denoc.restart(values[-1], values[0], top, low)
         return TrackedKappa(
-            kappa=float(values[-1] / values[0]),
+            kappa=extreme_ratio(values),
             lambda_max=float(values[-1]),
             lambda_min=float(values[0]),
             products=0,

@@ -15,14 +15,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import ClassVar
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics import conditioning
 from gimwatch.metrics.alarm import (
     DEFAULT_ALARM_THRESHOLD,
     Alarm,
@@ -31,9 +29,8 @@ from gimwatch.metrics.alarm import (
     warn_alarm,
 )
 from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
-from gimwatch.metrics.matrix_free import kappa_matrix_free
+from gimwatch.metrics.registry import METRICS, GimState
 from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
-from gimwatch.model.inertia import gim, gim_diagonal
 from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = [
@@ -46,231 +43,6 @@ __all__ = [
     "Watch",
     "estimator_quality",
 ]
-
-
-class _GimState:
-    """Lazily computed, shared per-sample quantities of M(q)."""
-
-    def __init__(
-        self, robot: Robot, data, q: np.ndarray, full: bool, dynamics=None, lean=None
-    ) -> None:
-        self.robot, self.data, self.q, self.full = robot, data, q, full
-        self.dynamics, self.lean = dynamics, lean
-        self._M = self._diag = self._eig = None
-
-    @property
-    def M(self) -> np.ndarray:
-        if self._M is None:
-            M = (
-                gim(self.robot, self.q, data=self.data)
-                if self.dynamics is None
-                else self.dynamics.gim(self.q)
-            )
-            self._M = conditioning.check_gim(M)
-        return self._M
-
-    @property
-    def diag(self) -> np.ndarray:
-        if self._diag is None:
-            self._diag = (
-                np.diag(self.M).copy()
-                if self.full
-                else self.lean.gim_diagonal(self.q)  # one compiled call, buffers kept
-                if self.lean is not None
-                else gim_diagonal(self.robot, self.q, data=self.data)
-                if self.dynamics is None
-                else self.dynamics.gim_diagonal(self.q)
-            )
-        return self._diag
-
-    @property
-    def delta(self) -> float:
-        """δ = max M_ii / min M_ii: one compiled call when DeNOC's lean model serves diag M."""
-        if self.lean is not None and not self.full and self._diag is None:
-            value = self.lean.diagonal_ratio(self.q)
-            if 1.0 <= value < math.inf:  # else the checked path below names the problem
-                return value
-        return conditioning.diagonal_ratio(self.diag)
-
-    @property
-    def eigenvalues(self) -> np.ndarray:
-        if self._eig is None:
-            self._eig = conditioning.eigenvalues(self.M)
-        return self._eig
-
-
-class Metric:
-    """One watched quantity. ``full``: needs M (not only its diagonal)."""
-
-    name: ClassVar[str]
-    full: ClassVar[bool] = True
-    vector: ClassVar[bool] = False
-
-    def __call__(self, state: _GimState):
-        raise NotImplementedError
-
-    def severity(self, value: float) -> float:
-        """The value on a condition-number scale (large = ill-conditioned), for alarms."""
-        return value
-
-
-class Kappa(Metric):
-    """κ₂ = λmax / λmin (Eq. 6)."""
-
-    name = "kappa"
-
-    def __call__(self, state):
-        values = state.eigenvalues
-        return float(values[-1] / values[0])
-
-
-class KappaLanczos(Metric):
-    """κ₂ = λmax / λmin (Eq. 6) by low-accuracy Lanczos on the RNEA and ABA operators.
-
-    No M is formed (:func:`gimwatch.metrics.matrix_free.kappa_matrix_free`, ARPACK tolerance
-    :attr:`TOL`); each sample starts from the previous sample's extreme eigenvectors, so
-    along a smooth trajectory a few O(n) products per sample suffice.
-    """
-
-    name = "kappa_lanczos"
-    full = False
-    TOL: ClassVar[float] = 1e-3
-
-    def __init__(self) -> None:
-        self.start: tuple[np.ndarray, np.ndarray] | None = None
-        self.data = None
-
-    def __call__(self, state):
-        if self.data is None:  # RNEA/ABA need a Pinocchio Data, even when M comes from DeNOC
-            self.data = state.robot.new_data() if state.data is None else state.data
-        result = kappa_matrix_free(
-            state.robot, state.q, data=self.data, seed=0, tol=self.TOL, start=self.start
-        )
-        self.start = (result.vector_max, result.vector_min)
-        return result.kappa
-
-
-class KappaTracked(Metric):
-    """κ₂ = λmax / λmin (Eq. 6) to a relative tolerance 1e-10, tracked at O(n) per sample.
-
-    :class:`gimwatch.metrics.tracker.KappaTracker` on DeNOC's compiled M·x and M⁻¹·y (or
-    Pinocchio's RNEA/ABA when DeNOC cannot read the robot), warm-started from the previous
-    sample's eigenvectors, with a detected cold-start fallback. ``products`` lists the O(n)
-    products each sample took.
-    """
-
-    name = "kappa_tracked"
-    full = False
-
-    def __init__(self) -> None:
-        self.tracker = None
-        self.products: list[int] = []
-
-    def __call__(self, state):
-        if self.tracker is None:
-            from gimwatch.metrics.tracker import KappaTracker
-            from gimwatch.metrics.tracker_providers import gim_products
-
-            provider = state.lean or gim_products(state.robot, state.dynamics, state.data)
-            self.tracker = KappaTracker(provider, state.robot.nv)
-        result = self.tracker.sample(state.q)
-        self.products.append(result.products)
-        return result.kappa
-
-
-class DiagonalRatio(Metric):
-    """δ = max M_ii / min M_ii (Sec. 4), from the O(n) diagonal."""
-
-    name = "diagonal_ratio"
-    full = False
-
-    def __call__(self, state):
-        return state.delta
-
-
-class ScaledDiagonalRatioMetric(Metric):
-    """αδ with α = κ(t0)/δ(t0) fixed at the first sample (Eq. 15)."""
-
-    name = "scaled_diagonal_ratio"
-    full = False
-
-    def __init__(self) -> None:
-        self.estimator = conditioning.ScaledDiagonalRatio()
-
-    def __call__(self, state):
-        if not self.estimator.calibrated:
-            self.estimator.calibrate(state.M)
-            return self.estimator(state.diag)
-        return self.estimator.alpha * state.delta  # Eq. 15 on the O(n) δ
-
-
-class PivotRatioForward(Metric):
-    """max/min LDLᵀ pivot (the paper's Gaussian elimination, Fig. 4)."""
-
-    name = "pivot_ratio_forward"
-
-    def __call__(self, state):
-        return conditioning.pivot_ratio_forward(state.M)
-
-
-class PivotRatioBackward(Metric):
-    """max/min UDUᵀ pivot (elimination from the tips)."""
-
-    name = "pivot_ratio_backward"
-
-    def __call__(self, state):
-        return conditioning.pivot_ratio_backward(state.M)
-
-
-class Rcond(Metric):
-    """LAPACK's reciprocal condition estimate 1/κ₁ (``dpocon``)."""
-
-    name = "rcond"
-
-    def __call__(self, state):
-        return 1.0 / conditioning.condition_estimate_1norm(state.M)
-
-    def severity(self, value: float) -> float:
-        return 1.0 / value
-
-
-class Eigenvalues(Metric):
-    """The spectrum of M, ascending (Fig. 2a)."""
-
-    name = "eigenvalues"
-    vector = True
-
-    def __call__(self, state):
-        return state.eigenvalues.copy()
-
-
-class Diagonal(Metric):
-    """diag M in Pinocchio's coordinate order (Fig. 2b)."""
-
-    name = "diagonal"
-    full = False
-    vector = True
-
-    def __call__(self, state):
-        return state.diag.copy()
-
-
-#: The registry: scene metric name -> class.
-METRICS: dict[str, type[Metric]] = {
-    cls.name: cls
-    for cls in (
-        Kappa,
-        KappaLanczos,
-        KappaTracked,
-        DiagonalRatio,
-        ScaledDiagonalRatioMetric,
-        PivotRatioForward,
-        PivotRatioBackward,
-        Rcond,
-        Eigenvalues,
-        Diagonal,
-    )
-}
 
 
 #: Watched when a constructor is given no metric names: κ (Eq. 6) and δ (Sec. 4).
@@ -481,14 +253,14 @@ class Watch:
             raise InputError("q", "given (a configuration of the robot)", None)
         if self._check_q:
             q = as_configuration(self.robot, q)
-        state = _GimState(self.robot, self.data, q, self.full, self.dynamics, self.lean)
+        state = GimState(self.robot, self.data, q, self.full, self.dynamics, self.lean)
         return self._record(t, state)
 
     def sample_matrix(self, t: float, M: npt.ArrayLike) -> Alarm | None:
         """Record the watched metrics of the given M (nv x nv, symmetric positive definite)."""
         given = self._hold()
         given.hold_matrix(M)
-        return self._record(t, _GimState(self.robot, None, None, self.full, given, None))
+        return self._record(t, GimState(self.robot, None, None, self.full, given, None))
 
     def sample_diagonal(self, t: float, diagonal: npt.ArrayLike) -> Alarm | None:
         """Record the watched metrics of the given diag M (only metrics that need no more)."""
@@ -499,7 +271,7 @@ class Watch:
                 )
         given = self._hold()
         given.hold_diagonal(diagonal)
-        return self._record(t, _GimState(self.robot, None, None, False, given, given))
+        return self._record(t, GimState(self.robot, None, None, False, given, given))
 
     def _hold(self) -> GivenMatrix:
         for name in OPERATOR_METRICS.intersection(self.metrics):

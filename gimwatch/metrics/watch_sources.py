@@ -33,6 +33,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.model.robots import Robot
 
 __all__ = ["GivenMatrix", "MujocoSource", "import_mujoco", "robot_from_model", "type_name"]
@@ -108,7 +109,7 @@ class GivenMatrix:
     def diagonal_ratio(self, q=None) -> float:
         """δ of the held diagonal, unchecked (NaN or < 1 sends the watch to its checked path)."""
         diag = self.gim_diagonal()
-        return float(diag.max() / diag.min())
+        return extreme_ratio(diag)
 
     def gim(self, q=None) -> np.ndarray:
         """The held M."""
@@ -280,7 +281,7 @@ class MujocoSource:
         diag = self._data_at(q).M[self._diag_index]
         if self._armature is not None:
             diag = diag - self._armature
-        return float(diag.max() / diag.min())
+        return extreme_ratio(diag)
 
 
 def _rotation(quaternion_wxyz: np.ndarray) -> np.ndarray:

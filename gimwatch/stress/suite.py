@@ -38,6 +38,7 @@ import scipy.linalg
 from gimwatch.crosscheck import denoc_model
 from gimwatch.errors import InputError
 from gimwatch.metrics import conditioning
+from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 from gimwatch.stress.cases import CASES, StressCase
 
@@ -157,16 +158,20 @@ def _pinocchio_methods(robot: Robot, gravity) -> tuple[dict[str, Callable], Call
     return methods, gim
 
 
+#: The registry metrics whose values on a hard case must be finite.
+FINITE_METRICS = (
+    "kappa",
+    "diagonal_ratio",
+    "scaled_diagonal_ratio",
+    "pivot_ratio_forward",
+    "pivot_ratio_backward",
+    "rcond",
+)
+
+
 def _estimators_finite(M: np.ndarray) -> bool:
-    values = [
-        conditioning.condition_number(M),
-        conditioning.diagonal_ratio(M),
-        conditioning.ScaledDiagonalRatio(alpha=None).calibrate(M),
-        conditioning.pivot_ratio_forward(M),
-        conditioning.pivot_ratio_backward(M),
-        1.0 / conditioning.condition_estimate_1norm(M),
-    ]
-    return bool(np.all(np.isfinite(values)))
+    values = evaluate(FINITE_METRICS, GimState(full=True, matrix=M))
+    return bool(np.all(np.isfinite(list(values.values()))))
 
 
 def run_case(case: StressCase, *, seed: int = 0, simulate: bool = False) -> StressResult:

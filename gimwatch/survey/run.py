@@ -29,12 +29,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg
 
 from gimwatch.errors import ConditioningError, GimwatchError, InputError, RobotError
-from gimwatch.metrics.conditioning import ldlt_pivots, udut_pivots
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.metrics.estimator_quality import correlations, estimator_quality
+from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.inertia import gim
 from gimwatch.model.robots import Robot, example_robot_names, load_robot, neutral_configuration
 from gimwatch.model.robots import random_configurations as _random_configurations
@@ -62,6 +61,8 @@ __all__ = [
 QUANTILES = {"min": 0.0, "p05": 0.05, "median": 0.5, "p95": 0.95, "max": 1.0}
 #: Per-sample metrics, in the order of the CSV columns.
 METRICS = ("kappa", "delta", "pivot_forward", "pivot_backward", "lambda_min", "lambda_max")
+#: The registry metrics behind the first columns of :data:`METRICS`.
+SURVEY_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_forward", "pivot_ratio_backward")
 #: Per-sample coordinate indices (into ``Robot.dof_names``).
 DOF_METRICS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_min_dof", "lambda_max_dof")
 _NO_DOF = "has no degree of freedom"
@@ -107,20 +108,18 @@ def sample_metrics(robot: Robot, qs: np.ndarray, *, data=None) -> dict[str, np.n
     out |= {key: np.empty(len(qs), dtype=np.int64) for key in DOF_METRICS}
     for row, q in enumerate(qs):
         M = check_robot_gim(robot, gim(robot, q, data=data))
-        diag = np.diag(M).copy()
-        values, vectors = scipy.linalg.eigh(M, check_finite=False)
-        if values[0] <= 0:
+        state = GimState(robot, data, q, full=True, matrix=M)
+        spectrum, vectors = state.eigenpairs  # one eigh: the spectrum and the extreme modes
+        if spectrum[0] <= 0:
             raise ConditioningError(
-                f"M(q) of {robot.name} is not positive definite (λmin = {values[0]:.3g})"
+                f"M(q) of {robot.name} is not positive definite (λmin = {spectrum[0]:.3g})"
             )
-        forward, backward = ldlt_pivots(M), udut_pivots(M)
-        out["kappa"][row] = values[-1] / values[0]
-        out["delta"][row] = diag.max() / diag.min()
-        out["pivot_forward"][row] = forward.max() / forward.min()
-        out["pivot_backward"][row] = backward.max() / backward.min()
-        out["lambda_min"][row], out["lambda_max"][row] = values[0], values[-1]
-        out["max_diagonal_dof"][row] = np.argmax(diag)
-        out["min_diagonal_dof"][row] = np.argmin(diag)
+        values = evaluate(SURVEY_METRICS, state)
+        for key, name in zip(METRICS, SURVEY_METRICS, strict=False):
+            out[key][row] = values[name]
+        out["lambda_min"][row], out["lambda_max"][row] = state.extremes
+        out["max_diagonal_dof"][row] = np.argmax(state.diag)
+        out["min_diagonal_dof"][row] = np.argmin(state.diag)
         out["lambda_min_dof"][row] = np.argmax(np.abs(vectors[:, 0]))
         out["lambda_max_dof"][row] = np.argmax(np.abs(vectors[:, -1]))
     return out
