@@ -104,8 +104,8 @@ def test_survey_trajectory_writes_the_along_run_columns(capsys, tmp_path):
     errors, pearsons = [], []
     for k in ("0", "1"):
         kappa = np.array([float(r["kappa"]) for r in runs if r["trajectory"] == k])
-        delta = np.array([float(r["delta"]) for r in runs if r["trajectory"] == k])
-        ad = np.array([float(r["alpha_delta"]) for r in runs if r["trajectory"] == k])
+        delta = np.array([float(r["diagonal_ratio"]) for r in runs if r["trajectory"] == k])
+        ad = np.array([float(r["scaled_diagonal_ratio"]) for r in runs if r["trajectory"] == k])
         np.testing.assert_allclose(ad, kappa[0] / delta[0] * delta, rtol=1e-12)
         errors.append(np.abs(ad[1:] - kappa[1:]) / kappa[1:])
         pearsons.append(np.corrcoef(np.log(delta), np.log(kappa))[0, 1])

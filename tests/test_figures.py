@@ -162,8 +162,11 @@ def _survey(count: int):
         robots.append(
             SimpleNamespace(
                 name=f"robot_{k}",
-                metrics={"delta": delta, "kappa": 2.0 * delta},
-                quantiles={"delta": {"min": delta.min()}, "kappa": {"max": 2 * delta.max()}},
+                metrics={"diagonal_ratio": delta, "kappa": 2.0 * delta},
+                quantiles={
+                    "diagonal_ratio": {"min": delta.min()},
+                    "kappa": {"max": 2 * delta.max()},
+                },
                 pearson_log=1.0 - k / 100,
                 alpha=2.0,
             )

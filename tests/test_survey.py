@@ -31,7 +31,7 @@ def _same(a, b):
         assert len(x.trajectories.runs) == len(y.trajectories.runs)
         for u, w in zip(x.trajectories.runs, y.trajectories.runs, strict=True):
             assert (u.start_sample, u.status, u.steps) == (w.start_sample, w.status, w.steps)
-            for key in ("t", "q", "kappa", "delta", "alpha_delta"):
+            for key in ("t", "q", "kappa", "diagonal_ratio", "scaled_diagonal_ratio"):
                 np.testing.assert_array_equal(getattr(u, key), getattr(w, key), err_msg=key)
 
 
@@ -43,7 +43,7 @@ def test_chain_metrics_match_the_closed_form_rod_gim():
         M = planar_rod_chain_gim(q, 2.2, 1.0)
         values, vectors = np.linalg.eigh(M)
         assert metrics["kappa"][row] == pytest.approx(values[-1] / values[0], rel=1e-9)
-        assert metrics["delta"][row] == pytest.approx(np.diag(M).max() / np.diag(M).min())
+        assert metrics["diagonal_ratio"][row] == pytest.approx(np.diag(M).max() / np.diag(M).min())
         assert metrics["lambda_min_dof"][row] == np.argmax(np.abs(vectors[:, 0]))
         assert metrics["lambda_max_dof"][row] == np.argmax(np.abs(vectors[:, -1]))
         assert metrics["min_diagonal_dof"][row] == np.argmin(np.diag(M))
@@ -61,9 +61,9 @@ def test_metrics_agree_with_analyze_on_a_real_robot():
         backward = np.diag(np.linalg.cholesky(M[::-1, ::-1])) ** 2
         for key, value in [
             ("kappa", values[-1] / values[0]),
-            ("delta", np.diag(M).max() / np.diag(M).min()),
-            ("pivot_forward", forward.max() / forward.min()),
-            ("pivot_backward", backward.max() / backward.min()),
+            ("diagonal_ratio", np.diag(M).max() / np.diag(M).min()),
+            ("pivot_ratio_forward", forward.max() / forward.min()),
+            ("pivot_ratio_backward", backward.max() / backward.min()),
             ("lambda_min", values[0]),
         ]:
             assert metrics[key][row] == pytest.approx(value, rel=1e-9), key
@@ -82,10 +82,10 @@ def test_paper_chain_is_calibrated_at_the_straight_neutral_configuration(serial)
 
 def test_statistics_recomputed_independently(serial):
     for r in serial.robots:
-        kappa, delta = r.metrics["kappa"], r.metrics["delta"]
+        kappa, delta = r.metrics["kappa"], r.metrics["diagonal_ratio"]
         assert np.all(kappa >= delta * (1 - 1e-12))  # lambda_min <= M_ii <= lambda_max
         assert r.quantiles["kappa"]["max"] == kappa.max()
-        assert r.quantiles["delta"]["median"] == pytest.approx(np.median(delta))
+        assert r.quantiles["diagonal_ratio"]["median"] == pytest.approx(np.median(delta))
         error = np.abs(kappa[0] / delta[0] * delta[1:] - kappa[1:]) / kappa[1:]
         assert r.alpha_delta_rel_error_median == pytest.approx(np.median(error), rel=1e-12)
         assert r.alpha_delta_rel_error_max == pytest.approx(error.max(), rel=1e-12)
@@ -189,8 +189,8 @@ def test_trajectory_statistics_match_an_independent_recomputation(serial):
             assert np.ptp(run.q, axis=0).max() > 1e-3  # it moved
             kappa, delta, alpha, error, pearson, spearman = _independent_run_statistics(robot, run)
             np.testing.assert_allclose(run.kappa, kappa, rtol=1e-9)
-            np.testing.assert_allclose(run.delta, delta, rtol=1e-12)
-            np.testing.assert_allclose(run.alpha_delta, alpha * delta, rtol=1e-9)
+            np.testing.assert_allclose(run.diagonal_ratio, delta, rtol=1e-12)
+            np.testing.assert_allclose(run.scaled_diagonal_ratio, alpha * delta, rtol=1e-9)
             assert run.alpha == pytest.approx(alpha, rel=1e-9)
             assert run.alpha_delta_rel_error_median == pytest.approx(np.median(error), abs=1e-9)
             assert run.pearson_log == pytest.approx(pearson, rel=1e-9)
@@ -218,7 +218,7 @@ def test_continuous_joints_use_rk4_and_a_stiff_run_stops_at_the_step_budget():
     robot = load_robot("kinova")
     kappa, delta, *_ = _independent_run_statistics(robot, run)
     np.testing.assert_allclose(run.kappa, kappa, rtol=1e-9)
-    np.testing.assert_allclose(run.delta, delta, rtol=1e-12)
+    np.testing.assert_allclose(run.diagonal_ratio, delta, rtol=1e-12)
     budget = TrajectorySettings(count=1, duration_s=0.1, sample_s=0.01, max_steps=30)
     (capped,) = run_survey(["kinova"], samples=1, workers=1, trajectories=budget).robots
     (run,) = capped.trajectories.runs

@@ -175,16 +175,17 @@ def run(args: argparse.Namespace) -> int:
         print(csv_text(records, CSV_COLUMNS))
         return 0
     print(f"{first.robot}: nv = {first.nv}, {base} base, method {first.method}")
+    # the registry's names, as in --json and --csv
     headers = [
         "config",
         "kappa",
-        "delta",
-        "pivot fwd",
-        "pivot bwd",
+        "diagonal_ratio",
+        "pivot_ratio_forward",
+        "pivot_ratio_backward",
         "lambda_min",
         "lambda_max",
-        "max diag",
-        "min diag",
+        "max_diagonal_dof",
+        "min_diagonal_dof",
     ]
     rows = [
         [

@@ -45,18 +45,18 @@ def plot_kappa_vs_delta(result: SurveyResult, ax=None):
     highlighted = _worst_tracked(result, HIGHLIGHTED)
     for robot in result.robots:
         if robot not in highlighted:
-            ax.scatter(robot.metrics["delta"], robot.metrics["kappa"], s=4, color="0.75")
+            ax.scatter(robot.metrics["diagonal_ratio"], robot.metrics["kappa"], s=4, color="0.75")
     ax.scatter([], [], s=10, color="0.75", label=f"other {len(result.robots) - len(highlighted)}")
     for k, robot in enumerate(highlighted):
         ax.scatter(
-            robot.metrics["delta"],
+            robot.metrics["diagonal_ratio"],
             robot.metrics["kappa"],
             s=8,
             color=f"C{k % 10}",
             label=f"{robot.name} (r = {_format(robot.pearson_log)})",
         )
     limits = [
-        min([r.quantiles["delta"]["min"] for r in result.robots], default=1.0),
+        min([r.quantiles["diagonal_ratio"]["min"] for r in result.robots], default=1.0),
         max([r.quantiles["kappa"]["max"] for r in result.robots], default=10.0),
     ]
     ax.plot(limits, limits, "k--", linewidth=0.8, label="κ = δ (lower bound)")
@@ -87,7 +87,7 @@ def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
     fig.set_layout_engine("constrained")
     axes = fig.subplots(rows, columns, squeeze=False)
     for ax, robot in zip(axes.flat, result.robots, strict=False):
-        delta = robot.metrics["delta"]
+        delta = robot.metrics["diagonal_ratio"]
         ax.scatter(delta, robot.metrics["kappa"], s=3, color="C0")
         line = np.array([np.nanmin(delta), np.nanmax(delta)])
         if math.isfinite(robot.alpha):

@@ -32,7 +32,15 @@ __all__ = [
 
 #: ``trajectory`` and ``t_s`` are empty on the random samples; on the rows of a simulated run
 #: ``sample`` is the sample it started from and only κ, δ and αδ are filled (the watched ones).
-CSV_COLUMNS = ("robot", "sample", "trajectory", "t_s", *METRICS, "alpha_delta", *DOF_METRICS)
+CSV_COLUMNS = (
+    "robot",
+    "sample",
+    "trajectory",
+    "t_s",
+    *METRICS,
+    "scaled_diagonal_ratio",
+    *DOF_METRICS,
+)
 SCATTER_PNG = "kappa_vs_delta.png"
 GRID_PNG = "kappa_vs_delta_per_robot.png"
 _EXTREME_COLUMNS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_max_dof", "lambda_min_dof")
@@ -107,7 +115,12 @@ def survey_record(result: SurveyResult, *, wall_time_s: float | None = None) -> 
                 },
                 "lambda_min_on_min_diagonal": r.lambda_min_on_min_diagonal,
                 "worst": [
-                    {"sample": w.sample, "kappa": w.kappa, "delta": w.delta, "q": list(w.q)}
+                    {
+                        "sample": w.sample,
+                        "kappa": w.kappa,
+                        "diagonal_ratio": w.diagonal_ratio,
+                        "q": list(w.q),
+                    }
                     for w in r.worst
                 ],
                 "trajectories": _trajectory_record(r.trajectories),
@@ -134,7 +147,7 @@ def _csv_text(result: SurveyResult) -> str:
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
     for r in result.robots:
-        alpha_delta = r.alpha_delta()
+        alpha_delta = r.scaled_diagonal_ratio()
         for row, sample in enumerate(r.sample_index):
             floats = [repr(float(r.metrics[key][row])) for key in METRICS]
             dofs = [r.dof_names[r.metrics[key][row]] for key in DOF_METRICS]
@@ -145,9 +158,9 @@ def _csv_text(result: SurveyResult) -> str:
             for row, t in enumerate(run.t):
                 floats = [""] * len(METRICS)
                 floats[METRICS.index("kappa")] = repr(float(run.kappa[row]))
-                floats[METRICS.index("delta")] = repr(float(run.delta[row]))
+                floats[METRICS.index("diagonal_ratio")] = repr(float(run.diagonal_ratio[row]))
                 cells = [r.name, run.start_sample, k, repr(float(t)), *floats]
-                writer.writerow([*cells, repr(float(run.alpha_delta[row])), *[""] * 4])
+                writer.writerow([*cells, repr(float(run.scaled_diagonal_ratio[row])), *[""] * 4])
     return buffer.getvalue()
 
 
@@ -161,7 +174,7 @@ def readme_table(result: SurveyResult) -> str:
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|" + ("---:|---:|" if along else ""),
     ]
     for r in result.robots:
-        q_kappa, q_delta = r.quantiles["kappa"], r.quantiles["delta"]
+        q_kappa, q_delta = r.quantiles["kappa"], r.quantiles["diagonal_ratio"]
         dof, frequency = r.extreme_dofs["lambda_min_dof"]
         line = (
             f"| {r.name} | {r.nv} | {_base(r)} | {_g(q_kappa['median'])} | {_g(q_kappa['max'])} "
@@ -299,8 +312,8 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
     for r in result.robots:
-        k, d = r.quantiles["kappa"], r.quantiles["delta"]
-        f, b = r.quantiles["pivot_forward"], r.quantiles["pivot_backward"]
+        k, d = r.quantiles["kappa"], r.quantiles["diagonal_ratio"]
+        f, b = r.quantiles["pivot_ratio_forward"], r.quantiles["pivot_ratio_backward"]
         lines.append(
             f"| {r.name} | {_g(k['p05'])} | {_g(k['p95'])} | {_g(d['p05'])} | {_g(d['p95'])} "
             f"| {_g(f['median'])} / {_g(f['max'])} | {_g(b['median'])} / {_g(b['max'])} |"
@@ -332,7 +345,8 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
     ]
     for r in result.robots:
         for w in r.worst:
-            lines.append(f"| {r.name} | {w.sample} | {_g(w.kappa, 4)} | {_g(w.delta, 4)} |")
+            kappa, delta = _g(w.kappa, 4), _g(w.diagonal_ratio, 4)
+            lines.append(f"| {r.name} | {w.sample} | {kappa} | {delta} |")
     lines += _trajectory_section(result)
     if result.failures:
         lines += ["", "## Robots not surveyed", "", "| robot | stage | reason |", "|---|---|---|"]

@@ -59,10 +59,10 @@ __all__ = [
 
 #: Quantile levels reported for κ, δ and the pivot ratios.
 QUANTILES = {"min": 0.0, "p05": 0.05, "median": 0.5, "p95": 0.95, "max": 1.0}
-#: Per-sample metrics, in the order of the CSV columns.
-METRICS = ("kappa", "delta", "pivot_forward", "pivot_backward", "lambda_min", "lambda_max")
-#: The registry metrics behind the first columns of :data:`METRICS`.
+#: The registry metrics among the per-sample metrics (the registry's names are the column names).
 SURVEY_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_forward", "pivot_ratio_backward")
+#: Per-sample metrics, in the order of the CSV columns.
+METRICS = (*SURVEY_METRICS, "lambda_min", "lambda_max")
 #: Per-sample coordinate indices (into ``Robot.dof_names``).
 DOF_METRICS = ("max_diagonal_dof", "min_diagonal_dof", "lambda_min_dof", "lambda_max_dof")
 _NO_DOF = "has no degree of freedom"
@@ -114,9 +114,8 @@ def sample_metrics(robot: Robot, qs: np.ndarray, *, data=None) -> dict[str, np.n
             raise ConditioningError(
                 f"M(q) of {robot.name} is not positive definite (λmin = {spectrum[0]:.3g})"
             )
-        values = evaluate(SURVEY_METRICS, state)
-        for key, name in zip(METRICS, SURVEY_METRICS, strict=False):
-            out[key][row] = values[name]
+        for name, value in evaluate(SURVEY_METRICS, state).items():
+            out[name][row] = value
         out["lambda_min"][row], out["lambda_max"][row] = state.extremes
         out["max_diagonal_dof"][row] = np.argmax(state.diag)
         out["min_diagonal_dof"][row] = np.argmin(state.diag)
@@ -155,7 +154,7 @@ class WorstConfiguration:
 
     sample: int
     kappa: float
-    delta: float
+    diagonal_ratio: float
     q: tuple[float, ...]
 
 
@@ -218,9 +217,9 @@ class RobotSurvey:
         """Number of samples surveyed."""
         return int(self.sample_index.size)
 
-    def alpha_delta(self) -> np.ndarray:
+    def scaled_diagonal_ratio(self) -> np.ndarray:
         """αδ at every sample (Shah & Saha 2013, Eq. 15)."""
-        return self.alpha * self.metrics["delta"]
+        return self.alpha * self.metrics["diagonal_ratio"]
 
 
 @dataclass(frozen=True)
@@ -247,21 +246,21 @@ class SurveyResult:
 
 
 def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> RobotSurvey:
-    kappa, delta = metrics["kappa"], metrics["delta"]
+    kappa, delta = metrics["kappa"], metrics["diagonal_ratio"]
     # t0 is the neutral configuration; without it (its M was refused) there is no α
     quality = estimator_quality(kappa, delta) if index[0] == 0 else None
     pearson, spearman = correlations(delta, kappa)
     nan = float("nan")
     quantiles = {
         key: {name: float(np.quantile(metrics[key], level)) for name, level in QUANTILES.items()}
-        for key in ("kappa", "delta", "pivot_forward", "pivot_backward")
+        for key in SURVEY_METRICS
     }
     order = np.argsort(-kappa, kind="stable")[:WORST_COUNT]
     worst = tuple(
         WorstConfiguration(
             sample=int(index[k]),
             kappa=float(kappa[k]),
-            delta=float(delta[k]),
+            diagonal_ratio=float(delta[k]),
             q=tuple(float(x) for x in qs[index[k]]),
         )
         for k in order

@@ -155,8 +155,8 @@ class SurveyRun:
         t: Watch sample times (s).
         q: Configurations at the samples, shape (len(t), nq).
         kappa: κ at the samples.
-        delta: δ at the samples.
-        alpha_delta: αδ at the samples (α at t0).
+        diagonal_ratio: δ at the samples.
+        scaled_diagonal_ratio: αδ at the samples (α at t0).
         alpha: κ(t0)/δ(t0).
         pearson_log: Pearson correlation of log δ with log κ (NaN if either is constant).
         spearman: Spearman correlation of δ with κ (NaN if either is constant).
@@ -172,8 +172,8 @@ class SurveyRun:
     t: np.ndarray = field(repr=False)
     q: np.ndarray = field(repr=False)
     kappa: np.ndarray = field(repr=False)
-    delta: np.ndarray = field(repr=False)
-    alpha_delta: np.ndarray = field(repr=False)
+    diagonal_ratio: np.ndarray = field(repr=False)
+    scaled_diagonal_ratio: np.ndarray = field(repr=False)
     alpha: float
     pearson_log: float
     spearman: float
@@ -223,8 +223,8 @@ def run_trajectory(
         t=trajectory.t[: kappa.size],
         q=trajectory.q[: kappa.size],
         kappa=kappa,
-        delta=delta,
-        alpha_delta=alpha_delta,
+        diagonal_ratio=delta,
+        scaled_diagonal_ratio=alpha_delta,
         alpha=math.nan if trajectory.alpha is None else float(trajectory.alpha),
         pearson_log=math.nan if quality is None else quality.pearson_log,
         spearman=math.nan if quality is None else quality.spearman,
@@ -275,7 +275,8 @@ def summarize_runs(
 ) -> TrajectoryStatistics:
     """Per-robot statistics over the completed runs (see the module docstring)."""
     done = [run for run in runs if run.status == "completed"]
-    error = np.concatenate([relative_errors(r.kappa, r.alpha_delta) for r in done] or [[]])
+    error = [relative_errors(r.kappa, r.scaled_diagonal_ratio) for r in done]
+    error = np.concatenate(error or [[]])
     return TrajectoryStatistics(
         runs=tuple(runs),
         errors=tuple(errors),
