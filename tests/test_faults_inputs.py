@@ -5,6 +5,7 @@ time, or library calls. Each gives one error line naming the file, key, link or 
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -228,3 +229,130 @@ def test_public_functions_raise_gimwatch_errors_on_non_numeric_q(tmp_path):
     for q in (np.array([1j, 0]), ["a", "b"]):
         with pytest.raises(GimwatchError, match="q must be a vector of real numbers"):
             analyze_configuration(robot, q)
+
+
+# --- Scenes: paths, the step budget --------------------------------------------------------
+
+SCENE = """robot = "{robot}"
+duration = 0.05
+sample = 0.01
+q = 0.1
+"""
+
+
+def test_a_robot_path_without_suffix_is_relative_to_the_scene(tmp_path, capsys, monkeypatch):
+    folder = tmp_path / "scenes"
+    (folder / "models").mkdir(parents=True)
+    _write(folder / "arm", GOOD)
+    _write(folder / "models" / "arm", GOOD)
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    _write(elsewhere / "arm", "not a URDF")  # what the working directory would give
+    monkeypatch.chdir(elsewhere)
+    for robot in ("arm", "models/arm"):
+        scene = _write(folder / "s.toml", SCENE.format(robot=robot))
+        code, out, err = _run(["simulate", str(scene), "-o", str(tmp_path / "out")], capsys)
+        assert code == 0, err
+        assert out.startswith("arm: completed"), out
+
+
+def test_a_bare_name_not_in_the_scene_folder_is_an_example_robot(tmp_path):
+    from gimwatch.simulation.scene import parse_scene
+
+    scene = parse_scene({"robot": "ur5", "duration": 1.0, "sample": 0.1}, base_dir=tmp_path)
+    assert scene.robot.spec == "ur5"
+
+
+def test_a_scene_symlink_loop_is_named(tmp_path, capsys):
+    (tmp_path / "loop.toml").symlink_to(tmp_path / "loop.toml")
+    code, out, err = _run(["simulate", str(tmp_path / "loop.toml")], capsys)
+    _one_error(code, out, err, "loop.toml: is a symbolic link loop")
+    (tmp_path / "loop.urdf").symlink_to(tmp_path / "loop.urdf")
+    scene = _write(tmp_path / "s.toml", SCENE.format(robot="loop.urdf"))
+    code, out, err = _run(["simulate", str(scene), "-o", str(tmp_path / "out")], capsys)
+    _one_error(code, out, err, "s.toml: robot:", "loop.urdf: is a symbolic link loop")
+
+
+STIFF = """robot = "chain:2"
+duration = 1.0
+sample = 0.1
+q = 0.5
+
+[integrator]
+method = "RK45"
+max_steps = {max_steps}
+
+[effects.spring]
+stiffness = 1e4
+"""
+
+
+def test_an_adaptive_run_stops_when_its_step_budget_is_spent(tmp_path, capsys):
+    scene = _write(tmp_path / "stiff.toml", STIFF.format(max_steps=50))
+    code, out, err = _run(["simulate", str(scene), "-o", str(tmp_path / "out")], capsys)
+    assert code == 1, err
+    assert "gimwatch: error: step budget spent: 50 RK45 steps reached t = " in err
+    assert "raise [integrator] max_steps" in err and "Traceback" not in err
+    assert "chain_2: failed" in out and (tmp_path / "out" / "summary.json").is_file()
+    scene = _write(tmp_path / "stiff.toml", STIFF.format(max_steps=100_000))  # the control
+    code, out, err = _run(["simulate", str(scene), "-o", str(tmp_path / "out2")], capsys)
+    assert code == 0 and "chain_2: completed" in out, err
+
+
+def test_a_spec_built_in_python_keeps_the_fixed_step_budget():
+    from gimwatch.simulation.integrators import INTEGRATORS
+    from gimwatch.simulation.scene_integrator import IntegratorSpec
+
+    class Problem:  # a run that would need 1e6 steps
+        duration_s, sample_s = 1.0, 0.5
+
+    integrator = INTEGRATORS["RK4"](IntegratorSpec(method="RK4", dt=1e-6, max_steps=10))
+    status, message = integrator.run(Problem(), record=None)
+    assert status == "failed" and message.startswith("step budget spent: 10 RK4 steps")
+    assert integrator.steps == 0
+
+
+# --- Command-line budgets ------------------------------------------------------------------
+
+
+def test_analyze_random_work_budget(capsys, monkeypatch):
+    monkeypatch.delenv("GIMWATCH_MAX_RANDOM_WORK", raising=False)
+    code, out, err = _run(["analyze", "chain:5000", "--random", "100000"], capsys)
+    _one_error(code, out, err, "--random must be at most 400 for nv = 5000", "count x nv")
+    monkeypatch.setenv("GIMWATCH_MAX_RANDOM_WORK", "4")
+    code, out, err = _run(["analyze", "chain:2", "--random", "3"], capsys)
+    _one_error(code, out, err, "--random must be at most 2 for nv = 2")
+    monkeypatch.setenv("GIMWATCH_MAX_RANDOM_WORK", "6")
+    code, out, err = _run(["analyze", "chain:2", "--random", "3", "--json"], capsys)
+    assert code == 0 and err == "", err
+
+
+def test_survey_workers_are_capped_at_the_cores(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("GIMWATCH_MAX_WORKERS", raising=False)
+    cores = len(os.sched_getaffinity(0))
+    argv = ["survey", "chain:2", "--samples", "2", "-o", str(tmp_path / "out")]
+    code, out, err = _run([*argv, "--workers", str(cores + 1)], capsys)
+    _one_error(code, out, err, f"--workers must be at most {cores}, the cores", "GIMWATCH_MAX")
+    assert not (tmp_path / "out").exists()
+    monkeypatch.setenv("GIMWATCH_MAX_WORKERS", "1")
+    code, out, err = _run([*argv, "--workers", "2"], capsys)
+    _one_error(code, out, err, "--workers must be at most 1")
+    code, out, err = _run([*argv, "--workers", "1"], capsys)
+    assert code == 0, err
+
+
+def test_survey_trajectory_duration_is_within_the_step_budget(tmp_path, capsys):
+    argv = ["survey", "chain:2", "--samples", "2", "-o", str(tmp_path / "out"), "--trajectory"]
+    code, out, err = _run([*argv, "--duration", "1e300"], capsys)
+    _one_error(code, out, err, "--duration must be at most 100 s (the step budget of 100000")
+    assert not (tmp_path / "out").exists()
+
+
+def test_bench_page_without_markers_is_refused_before_running(tmp_path, capsys):
+    page = _write(tmp_path / "page.md", "# no markers here\n")
+    argv = ["bench", "--quick", "conditioning", "-o", str(tmp_path / "out"), "--readme"]
+    code, out, err = _run([*argv, str(page)], capsys)
+    _one_error(code, out, err, "page.md must be a file with <!-- bench:start -->")
+    assert not (tmp_path / "out").exists()
+    code, out, err = _run([*argv, str(tmp_path / "missing.md")], capsys)
+    _one_error(code, out, err, "missing.md: cannot be read")

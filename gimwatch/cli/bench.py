@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from gimwatch.bench import SECTIONS, run_bench
 from gimwatch.cli._format import non_negative_int
+from gimwatch.errors import InputError, OutputError
 
 NAME = "bench"
 HELP = "what accuracy costs in time: tables, plots and a Markdown report"
@@ -42,6 +44,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _check_page(page: Path) -> None:
+    """The page --page regenerates must exist and hold the bench markers."""
+    from gimwatch.bench.report import README_END, README_START
+
+    try:
+        text = page.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise OutputError(str(page), f"cannot be read ({exc.__class__.__name__})") from exc
+    if README_START not in text or README_END not in text:
+        raise InputError(
+            f"{page}", f"a file with {README_START} and {README_END} markers", "no markers"
+        )
+
+
 def _progress(line: str) -> None:
     print(line, file=sys.stderr, flush=True)
 
@@ -55,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
             print(path)
         return 0
     which = ["all"] if "all" in args.which else args.which
+    if args.page is not None:
+        _check_page(Path(args.page))  # before the sections run, not after
     report = run_bench(
         which,
         args.output,

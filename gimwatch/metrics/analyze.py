@@ -20,6 +20,7 @@ from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
+    check_random_budget,
     load_robot,
     neutral_configuration,
     parse_chain_spec,
@@ -64,6 +65,7 @@ def _configurations(q, random, seed, nq, neutral, draw, robot=None, key="q", spe
     if q is not None and random is not None:
         raise InputError(f"{key} and random", "used one at a time", "both")
     if random is not None:
+        check_random_budget(random, nq)  # before anything is drawn
         return list(draw(random, seed))
     if q is None:
         return [neutral]

@@ -44,6 +44,7 @@ __all__ = [
     "Robot",
     "captured_c_output",
     "chain_robot",
+    "check_random_budget",
     "example_robot_names",
     "is_mjcf",
     "load_robot",
@@ -62,6 +63,10 @@ _DEFAULT_TRANSLATION_M = 1.0
 MAX_URDF_BYTES = 64 * 1024 * 1024
 #: random_configurations refuses to allocate more numbers than this (400 MB).
 MAX_RANDOM_NUMBERS = 50_000_000
+#: The most random configurations x velocity coordinates the command line analyses in one
+#: call (each an O(nv) to O(nv^3) analysis); ``$GIMWATCH_MAX_RANDOM_WORK`` overrides it.
+DEFAULT_MAX_RANDOM_WORK = 2_000_000
+MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
 #: Pinocchio's URDF parser recurses once per link along a branch and overflows the 8 MB
 #: C stack (a segmentation fault) between 3500 and 4000 links; deeper trees are refused.
 MAX_TREE_DEPTH = 2000
@@ -488,6 +493,30 @@ def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
         if not (np.all(_is_real_limit(lower[box])) and np.all(_is_real_limit(upper[box]))):
             names.append(name)
     return tuple(names)
+
+
+def check_random_budget(count: int, nv: int, *, option: str = "--random") -> None:
+    """Refuse ``count`` random configurations of ``nv`` coordinates beyond the work budget.
+
+    The budget is count x nv <= 2,000,000 (``$GIMWATCH_MAX_RANDOM_WORK`` overrides it); it
+    is checked before anything is drawn or allocated.
+
+    Raises:
+        InputError: Over the budget, or the variable is not a positive integer.
+    """
+    text = os.environ.get(MAX_RANDOM_WORK_VARIABLE, "").strip()
+    budget = DEFAULT_MAX_RANDOM_WORK
+    if text:
+        if not text.isdigit() or int(text) < 1:
+            raise InputError(f"${MAX_RANDOM_WORK_VARIABLE}", "a positive integer", text)
+        budget = int(text)
+    if count * nv > budget:
+        raise InputError(
+            option,
+            f"at most {max(budget // nv, 1)} for nv = {nv} (count x nv <= {budget}; set "
+            f"${MAX_RANDOM_WORK_VARIABLE} to allow more)",
+            count,
+        )
 
 
 def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = None) -> np.ndarray:

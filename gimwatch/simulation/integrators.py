@@ -42,6 +42,8 @@ __all__ = [
     "register",
 ]
 
+#: The step budget of a spec without ``max_steps`` (the scene's default, scene_integrator).
+DEFAULT_MAX_STEPS = 100_000
 #: A step shorter than this fraction of the duration is a collapse (the run diverges).
 MIN_STEP_FRACTION = 1e-12
 #: Within a piece, an adaptive method re-anchors when ‖Δq‖∞ exceeds this (rad or m).
@@ -63,6 +65,14 @@ class Problem(Protocol):
 
     def acceleration(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Joint accelerations (length nv) at (t, q, v)."""
+
+
+def _budget_spent(steps: int, t: float, duration_s: float, method: str) -> str:
+    return (
+        f"step budget spent: {steps} {method} steps reached t = {t:.6g} s of {duration_s:.6g} s "
+        "(the dynamics may be too stiff for this method: try Radau, or raise [integrator] "
+        "max_steps)"
+    )
 
 
 def _stopped(progress: Progress, fraction: float) -> Outcome | None:
@@ -87,7 +97,8 @@ class Integrator:
           at every sample time after t = 0 and ``progress(fraction)`` between steps, counts
           :attr:`steps`, and returns ``(status, message)``: ``("completed", "")``, what
           ``record`` returned, ``("stopped", message)`` when ``progress`` returned a message,
-          ``("diverged", why)`` on a non-finite state or a collapsing step, ``("failed", why)``.
+          ``("diverged", why)`` on a non-finite state or a collapsing step, ``("failed", why)``
+          (the step budget ``spec.max_steps`` spent, among others).
     """
 
     name: ClassVar[str]
@@ -97,6 +108,8 @@ class Integrator:
     def __init__(self, spec) -> None:
         self.spec = spec
         self.steps = 0
+        #: The step budget: ``failed`` once spent (adaptive) or refused (fixed step).
+        self.max_steps = int(getattr(spec, "max_steps", DEFAULT_MAX_STEPS))
 
     def run(self, problem: Problem, record: Record, progress: Progress = None) -> Outcome:
         """Integrate the whole run; see the class contract."""
@@ -171,6 +184,8 @@ class ScipyIntegrator(Integrator):
         self.steps += 1
         if not np.all(np.isfinite(solver.y)):
             return "diverged", f"non-finite state at t = {solver.t:.6g} s"
+        if solver.status == "running" and self.steps >= self.max_steps:
+            return "failed", _budget_spent(self.max_steps, solver.t, duration_s, method)
         step, min_step = solver.step_size, MIN_STEP_FRACTION * duration_s
         if solver.status == "running" and step is not None and step < min_step:
             return "diverged", (
@@ -307,6 +322,8 @@ class FixedStepIntegrator(Integrator):
         """Take round(duration / dt) steps; see :class:`Integrator`."""
         dt = self.spec.dt
         n_steps = round(problem.duration_s / dt)
+        if n_steps > self.max_steps:  # a scene refuses it; a spec built in Python may not
+            return "failed", _budget_spent(self.max_steps, 0.0, problem.duration_s, self.name)
         every = round(problem.sample_s / dt)
         q, v = problem.q0.copy(), problem.v0.copy()
         for k in range(n_steps):

@@ -16,7 +16,6 @@ by :func:`joint_vector` when the simulation is built, because the names are the 
 
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,16 +23,26 @@ from typing import Any
 
 from gimwatch.errors import SceneError
 from gimwatch.metrics.watch import METRICS
+from gimwatch.model.robots import path_problem
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS as BACKEND_CLASSES
 from gimwatch.simulation.effects import EFFECTS
 from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.simulation.parameters import Parameter
+from gimwatch.simulation.scene_integrator import (
+    DEFAULT_MAX_STEPS,
+    MAX_DURATION_S,
+    IntegratorSpec,
+    check_steps,
+    read_integrator,
+)
+from gimwatch.simulation.scene_reader import JointValues, TableReader
 from gimwatch.simulation.torque_laws import TORQUE_LAWS
 from gimwatch.suggest import did_you_mean
 
 __all__ = [
     "BACKENDS",
+    "DEFAULT_MAX_STEPS",
     "EFFECT_KEYS",
     "FIXED_STEP_METHODS",
     "METRIC_NAMES",
@@ -86,14 +95,11 @@ _TOP_KEYS = {
     "watch",
 }
 
-JointValues = float | tuple[float, ...] | dict[str, float]
-
 #: Size limits checked before anything runs, so an absurd scene fails at once instead of
 #: exhausting memory or running for years: samples kept (each a q, v and watch row),
 #: fixed integrator steps, initial |q| (rad or m) and |v| (rad/s or m/s; a larger speed
 #: shrinks an adaptive step towards zero), and the bytes of a scene file.
 MAX_SAMPLES = 1_000_000
-MAX_FIXED_STEPS = 100_000_000
 MAX_INITIAL_STATE = 1e6
 MAX_SCENE_BYTES = 1024 * 1024
 
@@ -113,22 +119,6 @@ class EffectSpec:
 
     name: str
     params: dict[str, Any]
-
-
-@dataclass(frozen=True)
-class IntegratorSpec:
-    """The integrator: a scipy ``solve_ivp`` method (rtol, atol) or a fixed step (dt, s)."""
-
-    method: str = "DOP853"
-    rtol: float = 1e-8
-    atol: float = 1e-8
-    dt: float | None = None
-    max_step: float = math.inf
-
-    @property
-    def fixed_step(self) -> bool:
-        """Whether the method takes fixed steps of ``dt``."""
-        return INTEGRATORS[self.method].fixed_step
 
 
 @dataclass(frozen=True)
@@ -167,102 +157,7 @@ class Scene:
         return SceneError(self.source, key, problem)
 
 
-class _Reader:
-    """Typed access to a TOML table that reports errors as ``source: key: problem``."""
-
-    def __init__(self, source: str, table: dict, prefix: str = "") -> None:
-        self.source, self.table, self.prefix = source, table, prefix
-
-    def key(self, name: str) -> str:
-        return f"{self.prefix}{name}"
-
-    def fail(self, name: str, problem: str) -> SceneError:
-        return SceneError(self.source, self.key(name), problem)
-
-    def check_keys(self, allowed: set[str] | tuple[str, ...], required: tuple[str, ...] = ()):
-        for name in self.table:
-            if name not in allowed:
-                raise self.fail(name, f"unknown key; expected one of {', '.join(sorted(allowed))}")
-        for name in required:
-            if name not in self.table:
-                raise self.fail(name, "is required")
-
-    def number(self, name: str, default=None, *, positive=False, nonnegative=False) -> float:
-        if name not in self.table:
-            return default
-        value = self.table[name]
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(name, f"must be a number, got {value!r}")
-        value = float(value)
-        if not math.isfinite(value):
-            raise self.fail(name, f"must be finite, got {value!r}")
-        if positive and value <= 0:
-            raise self.fail(name, f"must be > 0, got {value!r}")
-        if nonnegative and value < 0:
-            raise self.fail(name, f"must be >= 0, got {value!r}")
-        return value
-
-    def string(self, name: str, default=None, *, choices: tuple[str, ...] = ()) -> str:
-        if name not in self.table:
-            return default
-        value = self.table[name]
-        if not isinstance(value, str):
-            raise self.fail(name, f"must be a string, got {value!r}")
-        if choices and value not in choices:
-            raise self.fail(name, f"must be one of {', '.join(choices)}, got {value!r}")
-        return value
-
-    def vector3(self, name: str, default=None) -> tuple[float, float, float]:
-        if name not in self.table:
-            return default
-        value = self.table[name]
-        if (
-            not isinstance(value, list)
-            or len(value) != 3
-            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in value)
-        ):
-            raise self.fail(name, f"must be a list of 3 numbers, got {value!r}")
-        if not all(math.isfinite(x) for x in value):
-            raise self.fail(name, f"must be finite, got {value!r}")
-        return tuple(float(x) for x in value)
-
-    def joint_values(
-        self, name: str, default=None, *, nonnegative=False, bound=math.inf
-    ) -> JointValues:
-        if name not in self.table:
-            return default
-        value = self.table[name]
-        items: list[tuple[str, Any]]
-        if isinstance(value, dict):
-            items = [(f"{name}.{k}", v) for k, v in value.items()]
-        elif isinstance(value, list):
-            items = [(f"{name}[{i}]", v) for i, v in enumerate(value)]
-            if not items:
-                raise self.fail(name, "must not be an empty list")
-        else:
-            items = [(name, value)]
-        for key, x in items:
-            if isinstance(x, bool) or not isinstance(x, (int, float)):
-                raise self.fail(key, f"must be a number, got {x!r}")
-            if not math.isfinite(x) or (nonnegative and x < 0):
-                rule = "finite and >= 0" if nonnegative else "finite"
-                raise self.fail(key, f"must be {rule}, got {x!r}")
-            if abs(x) > bound:
-                raise self.fail(key, f"must be within ±{bound:g}, got {x!r}")
-        if isinstance(value, dict):
-            return {k: float(v) for k, v in value.items()}
-        if isinstance(value, list):
-            return tuple(float(x) for x in value)
-        return float(value)
-
-    def sub(self, name: str, default: dict | None = None) -> _Reader:
-        value = self.table.get(name, default if default is not None else {})
-        if not isinstance(value, dict):
-            raise self.fail(name, f"must be a table, got {value!r}")
-        return _Reader(self.source, value, f"{self.prefix}{name}.")
-
-
-def _robot(reader: _Reader, base_dir: Path | None) -> RobotSpec:
+def _robot(reader: TableReader, base_dir: Path | None) -> RobotSpec:
     floating = reader.string("base", "fixed", choices=("fixed", "floating")) == "floating"
     if "robot" not in reader.table:
         raise reader.fail("robot", "is required")
@@ -275,16 +170,35 @@ def _robot(reader: _Reader, base_dir: Path | None) -> RobotSpec:
         n = chain.table["n"]
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise chain.fail("n", f"must be a positive integer, got {n!r}")
-        return RobotSpec(spec=f"chain:{n}", floating=floating, chain=dict(value))
+        params = dict(value)
+        for key in ("mass_kg", "length_m", "radius_m"):  # numbers or lists, read as floats
+            if not isinstance(params.get(key), (dict, type(None))):
+                values = chain.joint_values(key)
+                params[key] = list(values) if isinstance(values, tuple) else values
+        return RobotSpec(spec=f"chain:{n}", floating=floating, chain=params)
     if not isinstance(value, str) or not value:
         raise reader.fail("robot", f"must be a string or a chain table, got {value!r}")
-    if value.lower().endswith((".urdf", ".xml")) and base_dir is not None:
+    if base_dir is not None and _is_path(value, base_dir):
         path = Path(value)
         value = str(path if path.is_absolute() else base_dir / path)
     return RobotSpec(spec=value, floating=floating)
 
 
-def _parameter(table: _Reader, parameter: Parameter) -> Any:
+def _is_path(value: str, base_dir: Path) -> bool:
+    """Whether a scene's ``robot`` string names a file (resolved against the scene's folder).
+
+    ``chain:N`` is not; a value with a folder separator or a ``.urdf``/``.xml`` suffix is; a
+    bare name is a file when the scene's folder holds one by that name, else an
+    example-robot-data name.
+    """
+    if value.startswith("chain:"):
+        return False
+    if "/" in value or value.lower().endswith((".urdf", ".xml")):
+        return True
+    return (base_dir / value).exists()
+
+
+def _parameter(table: TableReader, parameter: Parameter) -> Any:
     """Read one declared parameter (absent: its default, or None)."""
     name, kind = parameter.name, parameter.kind
     if kind == "number":
@@ -296,7 +210,7 @@ def _parameter(table: _Reader, parameter: Parameter) -> Any:
     return table.string(name, parameter.default, choices=tuple(parameter.choices))
 
 
-def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
+def _effects(reader: TableReader) -> tuple[EffectSpec, ...]:
     effects = []
     for name in reader.table:
         if name not in EFFECTS:
@@ -324,27 +238,7 @@ def _effects(reader: _Reader) -> tuple[EffectSpec, ...]:
     return tuple(effects)
 
 
-def _integrator(reader: _Reader) -> IntegratorSpec:
-    reader.check_keys({"method", "rtol", "atol", "dt", "max_step"})
-    method = reader.string("method", "DOP853", choices=tuple(INTEGRATORS))
-    if INTEGRATORS[method].fixed_step:
-        if "dt" not in reader.table:
-            raise reader.fail("dt", f"is required by the fixed-step method {method}")
-        for key in ("rtol", "atol", "max_step"):
-            if key in reader.table:
-                raise reader.fail(key, f"does not apply to the fixed-step method {method}")
-        return IntegratorSpec(method=method, dt=reader.number("dt", positive=True))
-    if "dt" in reader.table:
-        raise reader.fail("dt", f"applies to fixed-step methods only, not {method}")
-    return IntegratorSpec(
-        method=method,
-        rtol=reader.number("rtol", 1e-8, positive=True),
-        atol=reader.number("atol", 1e-8, positive=True),
-        max_step=reader.number("max_step", math.inf, positive=True),
-    )
-
-
-def _watch(reader: _Reader) -> WatchSpec:
+def _watch(reader: TableReader) -> WatchSpec:
     reader.check_keys({"metrics", "alarm_metric", "alarm_threshold", "on_alarm"})
     metrics = reader.table.get("metrics", [])
     if not isinstance(metrics, list) or not all(isinstance(m, str) for m in metrics):
@@ -360,6 +254,12 @@ def _watch(reader: _Reader) -> WatchSpec:
         raise reader.fail("metrics", f"lists a metric twice: {metrics!r}")
     threshold = reader.number("alarm_threshold", positive=True)
     scalar = [m for m in metrics if m not in ("eigenvalues", "diagonal")]
+    if threshold is not None and not scalar and "alarm_metric" not in reader.table:
+        raise reader.fail(
+            "alarm_threshold",
+            "has no metric to watch: list a scalar metric in watch.metrics "
+            f"(one of {', '.join(m for m in METRICS if m not in ('eigenvalues', 'diagonal'))})",
+        )
     alarm_metric = reader.string("alarm_metric", scalar[0] if scalar and threshold else None)
     if alarm_metric is not None:
         if alarm_metric not in scalar:
@@ -385,10 +285,10 @@ def parse_scene(
     Raises:
         SceneError: The first bad key, as ``source: key: problem``.
     """
-    reader = _Reader(source, table)
+    reader = TableReader(source, table)
     reader.check_keys(_TOP_KEYS, required=("robot", "duration", "sample"))
     robot = _robot(reader, base_dir)
-    duration = reader.number("duration", positive=True)
+    duration = reader.number("duration", positive=True, maximum=MAX_DURATION_S)
     sample = reader.number("sample", positive=True)
     if sample > duration:
         raise reader.fail("sample", f"must be <= duration ({duration} s), got {sample}")
@@ -399,15 +299,9 @@ def parse_scene(
         )
     dynamics = reader.sub("dynamics")
     dynamics.check_keys({"backend"})
-    integrator = _integrator(reader.sub("integrator"))
+    integrator = read_integrator(reader.sub("integrator"))
+    check_steps(source, integrator, duration)
     if integrator.fixed_step:
-        if duration / integrator.dt > MAX_FIXED_STEPS:
-            raise SceneError(
-                source,
-                "integrator.dt",
-                f"duration / dt must be at most {MAX_FIXED_STEPS} steps, "
-                f"got {duration / integrator.dt:.3g}",
-            )
         ratio = sample / integrator.dt
         if abs(ratio - round(ratio)) > 1e-9 * ratio:
             raise SceneError(
@@ -439,7 +333,7 @@ def load_scene(path: str | Path) -> Scene:
     path = Path(path)
     try:
         if not path.exists():  # also a path through a file (NotADirectoryError)
-            raise SceneError(str(path), "", "no such file")
+            raise SceneError(str(path), "", path_problem(path))
         if path.is_dir():
             raise SceneError(str(path), "", "is a directory, not a scene file")
         if not path.is_file():  # a FIFO or device could block forever

@@ -1,5 +1,7 @@
 """The scene's robot and its initial state: ``robot``/``base`` and ``q``/``v`` resolved.
 
+A robot with a joint that moves no mass is refused here, naming the URDF and the joint.
+
 Loading failures become a :class:`~gimwatch.errors.SceneError` on key ``robot``; q is read
 in user coordinates (continuous joints by angle, ``q = 0.0``: every angle zero and the
 neutral base; see :mod:`gimwatch.model.configuration`), v in velocity coordinates.
@@ -9,7 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from gimwatch.errors import GimwatchError, RobotError, SceneError
+from gimwatch.errors import ConditioningError, GimwatchError, RobotError, SceneError
+from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
@@ -59,4 +62,31 @@ def initial_state(scene, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     if scene.q is not None:
         q0 = joint_vector(robot, scene.q, source=scene.source, key="q", space="q", default=q0)
     v0 = joint_vector(robot, scene.v, source=scene.source, key="v")
+    _check_moving_mass(scene, robot)
     return q0, v0
+
+
+def _check_moving_mass(scene, robot: Robot) -> None:
+    """Refuse a robot with a joint that moves no mass (M singular), naming the joint.
+
+    Forward dynamics would divide by zero at t = 0. Read from the model's inertias (no M is
+    formed): a joint whose subtree has no mass, and for a rotation no rotational inertia
+    either, has M_kk = 0 at every q.
+    """
+    model = robot.model
+    mass = [float(body.mass) for body in model.inertias]
+    rotational = [float(np.abs(body.inertia).sum()) for body in model.inertias]
+    for k in range(model.njoints - 1, 0, -1):  # subtree sums, leaves first: O(n)
+        parent = model.parents[k]
+        mass[parent] += mass[k]
+        rotational[parent] += rotational[k]
+    diagonal = []
+    for k in range(1, model.njoints):
+        joint = model.joints[k]
+        prismatic = joint.shortname().startswith(("JointModelP", "JointModelTranslation"))
+        moves = mass[k] > 0 if prismatic else (mass[k] > 0 or rotational[k] > 0)
+        diagonal += [1.0 if moves else 0.0] * joint.nv
+    try:
+        check_massless(np.array(diagonal), robot.dof_names, name=robot.name, source=robot.source)
+    except ConditioningError as exc:
+        raise scene.error("robot", str(exc)) from exc
