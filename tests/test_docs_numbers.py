@@ -408,12 +408,12 @@ def _run_json(main, argv) -> str:
 
 
 def _urdf_robots() -> list[str]:
-    from gimwatch.model.robots import RobotError, _example_robot_urdf, example_robot_names
+    from gimwatch.model.robots import RobotError, example_robot_names, example_robot_urdf
 
     names = []
     for name in example_robot_names():
         try:
-            _example_robot_urdf(name)
+            example_robot_urdf(name)
         except RobotError:
             continue
         names.append(name)
@@ -446,12 +446,12 @@ def test_triangle_inequality_warning_count_is_the_robots_that_warn():
     import warnings
 
     from gimwatch.errors import URDFWarning
-    from gimwatch.model.robots import _example_robot_urdf, _read_urdf
+    from gimwatch.model.robots import _read_urdf, example_robot_urdf
     from gimwatch.model.urdf_text import check_urdf
 
     warned = []
     for name in _urdf_robots():
-        path = _example_robot_urdf(name)
+        path = example_robot_urdf(name)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             check_urdf(_read_urdf(path), str(path))

@@ -22,7 +22,7 @@ from gimwatch.metrics.dense_analysis import analyze_configuration
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
-    _example_robot_urdf,
+    example_robot_urdf,
     load_robot,
     neutral_configuration,
 )
@@ -34,7 +34,7 @@ SEEDS = {
     )
     .read_text()
     .replace('ixx="0.001" ixy="0" ixz="0" iyy="0.001"', 'ixx="0.084" ixy="0" ixz="0" iyy="0.084"'),
-    "ur5": _example_robot_urdf("ur5").read_text(),
+    "ur5": example_robot_urdf("ur5").read_text(),
 }
 HOSTILE_VALUES = [
     "",

@@ -28,7 +28,9 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import InputError, RobotError
-from gimwatch.model.robots import Robot, captured_c_output, with_free_joint
+from gimwatch.model.captured_output import captured_c_output
+from gimwatch.model.mjcf_model import with_free_joint
+from gimwatch.model.robots import Robot
 
 __all__ = ["MujocoRefusal", "compile_robot", "compile_urdf", "mass_matrix", "pinocchio_mass_matrix"]
 

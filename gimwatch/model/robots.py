@@ -18,17 +18,12 @@ nv = 300), so callers ask for it with :meth:`Robot.new_data` only when they need
 
 from __future__ import annotations
 
-import contextlib
 import difflib
 import errno
 import os
 import re
-import sys
-import tempfile
 import warnings
-from collections.abc import Iterator
 from dataclasses import dataclass, field
-from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -36,11 +31,27 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import ExampleRobotWarning, InputError, RobotError, URDFError
+from gimwatch.model.captured_output import captured_c_output
 from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
+from gimwatch.model.example_robots import (
+    EXAMPLE_ROBOT_NOTES,
+    example_robot_loaders,
+    example_robot_names,
+    example_robot_urdf,
+)
+from gimwatch.model.mjcf_model import build_mjcf_model, is_mjcf
 from gimwatch.model.mjcf_values import check_mjcf
+from gimwatch.model.sampling import (
+    PLACEHOLDER_LIMIT,
+    check_random_budget,
+    placeholder_limit_joints,
+    random_configurations,
+    unit_block_size,
+)
 
 __all__ = [
     "EXAMPLE_ROBOT_NOTES",
+    "PLACEHOLDER_LIMIT",
     "Robot",
     "captured_c_output",
     "chain_robot",
@@ -57,16 +68,8 @@ __all__ = [
 _CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
 #: Above this many velocity coordinates, a Pinocchio Data would need several GB.
 DATA_NV_LIMIT = 400
-_DEFAULT_ANGLE_RAD = np.pi
-_DEFAULT_TRANSLATION_M = 1.0
 #: The largest URDF file read (the biggest example-robot-data URDF is under 1 MB).
 MAX_URDF_BYTES = 64 * 1024 * 1024
-#: random_configurations refuses to allocate more numbers than this (400 MB).
-MAX_RANDOM_NUMBERS = 50_000_000
-#: The most random configurations x velocity coordinates the command line analyses in one
-#: call (each an O(nv) to O(nv^3) analysis); ``$GIMWATCH_MAX_RANDOM_WORK`` overrides it.
-DEFAULT_MAX_RANDOM_WORK = 2_000_000
-MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
 #: Pinocchio's URDF parser recurses once per link along a branch and overflows the 8 MB
 #: C stack (a segmentation fault) between 3500 and 4000 links; deeper trees are refused.
 MAX_TREE_DEPTH = 2000
@@ -135,53 +138,6 @@ class Robot:
         return self.model.createData()
 
 
-@cache
-def _example_robots() -> dict[str, type]:
-    from example_robot_data.robots_loader import ROBOTS
-
-    return dict(ROBOTS)
-
-
-#: example-robot-data names whose model, as gimwatch loads it (the URDF file as written, no
-#: reduction), is not what the name or ``example_robot_data.load(name)`` suggests.
-#: ``load_robot`` issues each as one :class:`~gimwatch.errors.ExampleRobotWarning`; the test
-#: ``tests/test_example_robot_loader.py`` compares every name with ``example_robot_data.load``.
-_UR5_AS_UR3 = "example-robot-data 5.0.0 ships a UR5 description under the name ur3"
-_TALOS_ROTORS = (
-    "example_robot_data.load adds rotor inertias from the SRDF (armature = rotor inertia x "
-    "gear ratio^2) to M's diagonal; gimwatch reads the URDF as written, without them"
-)
-EXAMPLE_ROBOT_NOTES = {
-    "ur3": _UR5_AS_UR3,
-    "ur3_gripper": _UR5_AS_UR3,
-    "ur3_limited": _UR5_AS_UR3,
-    "talos": _TALOS_ROTORS,
-    "talos_box": _TALOS_ROTORS,
-    "talos_arm": _TALOS_ROTORS,
-    "talos_full": _TALOS_ROTORS,
-    "talos_full_box": _TALOS_ROTORS,
-    "talos_legs": (
-        "the full 32-DoF Talos URDF; example_robot_data.load locks the upper body (18 DoF) "
-        "and adds rotor inertias from the SRDF"
-    ),
-}
-
-
-def example_robot_names() -> tuple[str, ...]:
-    """Names of the robots example-robot-data knows, in its own order."""
-    return tuple(_example_robots())
-
-
-def _example_robot_urdf(name: str) -> Path:
-    from example_robot_data.robots_loader import getModelPath
-
-    loader = _example_robots()[name]
-    if not loader.urdf_filename:
-        raise RobotError(name, "example-robot-data ships it only as SDF; gimwatch reads URDF")
-    relative = str(Path(loader.path) / loader.urdf_subpath / loader.urdf_filename)
-    return (Path(getModelPath(relative)) / relative).resolve()
-
-
 def _read_urdf(path: Path) -> str:
     """Read a URDF file; FIFOs and devices are refused (they could block or never end)."""
     try:
@@ -211,35 +167,6 @@ def path_problem(path: Path) -> str:
     return "no such file"
 
 
-@contextlib.contextmanager
-def captured_c_output(fd: int = 2) -> Iterator[list[str]]:
-    """Capture what C/C++ code (urdfdom, MuJoCo's compiler) writes to file descriptor ``fd``.
-
-    Yields a list that holds the captured lines once the block has ended.
-    """
-    lines: list[str] = []
-    stream = sys.stdout if fd == 1 else sys.stderr
-    try:
-        stream.flush()
-        saved = os.dup(fd)
-    except (OSError, ValueError, AttributeError):  # no such stream to protect
-        yield lines
-        return
-    with tempfile.TemporaryFile() as sink:
-        os.dup2(sink.fileno(), fd)
-        try:
-            yield lines
-        finally:
-            os.dup2(saved, fd)
-            os.close(saved)
-            sink.seek(0)
-            text = sink.read().decode("utf-8", "replace")
-            lines.extend(line.strip() for line in text.splitlines() if line.strip())
-
-
-_captured_stderr_fd = captured_c_output
-
-
 def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     from gimwatch.model.urdf_text import check_urdf
 
@@ -253,7 +180,7 @@ def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
         )
     # check_urdf reads every value urdfdom reads; should urdfdom still complain, its lines
     # become the error message instead of stray output on the user's terminal.
-    with _captured_stderr_fd() as complaints:
+    with captured_c_output() as complaints:
         try:
             if floating:
                 model = pin.buildModelFromXML(xml, pin.JointModelFreeFlyer())
@@ -301,63 +228,9 @@ def _too_deep(spec: str) -> RobotError:
     )
 
 
-def is_mjcf(xml: str) -> bool:
-    """Whether an XML text's root element is ``<mujoco>`` (after comments and declarations)."""
-    return re.match(r"^\s*(<\?[^>]*\?>\s*|<!--.*?-->\s*)*<mujoco\b", xml, re.DOTALL) is not None
-
-
-def with_free_joint(mjcf_xml: str, source: str) -> str:
-    """The MJCF text with ``<freejoint name="root_joint"/>`` in the first body of the world.
-
-    Pinocchio 4's ``buildModelFromMJCF(path, root_joint, name)`` ignores the root joint,
-    and MuJoCo's bodies are fixed unless they have a joint, so a floating base is written
-    into the text for both.
-    """
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.fromstring(mjcf_xml)
-    except ET.ParseError as exc:
-        raise URDFError(source, f"is not well-formed XML ({exc})") from exc
-    world = root.find("worldbody")
-    body = None if world is None else world.find("body")
-    if body is None:
-        raise URDFError(source, "has no <body> in <worldbody> to put a floating base on")
-    if body.find("freejoint") is not None or body.find("joint[@type='free']") is not None:
-        return mjcf_xml
-    if body.find("joint") is not None:
-        raise URDFError(
-            source,
-            f"its first body '{body.get('name', '')}' already has a joint, so there is no "
-            "base body to float; add a <freejoint/> body around it in the MJCF",
-        )
-    body.insert(0, ET.Element("freejoint", name="root_joint"))
-    return ET.tostring(root, encoding="unicode")
-
-
-def _build_mjcf_model(source: str, floating: bool, xml: str) -> pin.Model:
-    """Pinocchio's MJCF parser on the file ``source``; its complaints become one error."""
-    with _captured_stderr_fd() as complaints, tempfile.TemporaryDirectory() as folder:
-        path = source
-        if floating:
-            path = str(Path(folder) / Path(source).name)
-            Path(path).write_text(with_free_joint(xml, source), encoding="utf-8")
-        try:
-            model = pin.buildModelFromMJCF(path)
-        except Exception as exc:  # boost.python raises RuntimeError, ValueError, ...
-            model, failure = None, exc
-    if model is None:
-        # Pinocchio's message starts with its C++ source location; keep what follows.
-        detail = " ".join(str(failure).split("message:")[-1].split()) or type(failure).__name__
-        if complaints:
-            detail += f" ({complaints[0]})"
-        raise URDFError(source, f"Pinocchio cannot read this MJCF: {detail}")
-    return model
-
-
 def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> Robot:
     check_mjcf(xml, source)
-    model = _build_mjcf_model(source, floating, xml)
+    model = build_mjcf_model(source, floating, xml)
     if model.nv == 0:
         raise RobotError(
             spec, "has no degree of freedom with a fixed base; load it with a floating base"
@@ -412,8 +285,8 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
         if n > MAX_TREE_DEPTH:
             raise _too_deep(text)
         xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
-    elif text in _example_robots():
-        path = _example_robot_urdf(text)
+    elif text in example_robot_loaders():
+        path = example_robot_urdf(text)
         xml, source, name = _read_urdf(path), str(path), text
         if text in EXAMPLE_ROBOT_NOTES:
             warnings.warn(f"{text}: {EXAMPLE_ROBOT_NOTES[text]}", ExampleRobotWarning, stacklevel=2)
@@ -423,7 +296,7 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
         if is_mjcf(xml):
             return _mjcf_robot(xml, source, name, text, floating)
     else:
-        close = difflib.get_close_matches(text, _example_robots(), n=3)
+        close = difflib.get_close_matches(text, example_robot_loaders(), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
     model = _build_model(xml, source, floating)
@@ -461,109 +334,6 @@ def neutral_configuration(robot: Robot) -> np.ndarray:
     return pin.neutral(robot.model)
 
 
-def _unit_block_size(joint: pin.JointModel) -> int:
-    """Size of the unit-norm part of a joint's q (4 for quaternions, 2 for unit complex)."""
-    if joint.nq == joint.nv:
-        return 0
-    kind = joint.shortname()
-    return 4 if ("Spherical" in kind or "FreeFlyer" in kind) else 2
-
-
-#: A joint limit this large (or infinite) is a placeholder for "unlimited" (URDF writers put
-#: 1e3 ... 1e16 there); random configurations then use ±π rad / ±1 m instead.
-PLACEHOLDER_LIMIT = 1e3
-
-
-def _is_real_limit(limit: np.ndarray) -> np.ndarray:
-    return np.isfinite(limit) & (np.abs(limit) < PLACEHOLDER_LIMIT)
-
-
-def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
-    """Joints with a coordinate whose limit is a placeholder (|limit| >= 1e3 or infinite).
-
-    :func:`random_configurations` draws those coordinates in ±π rad (angles) or ±1 m
-    (translations, the free-flyer's position included) instead. Continuous joints and
-    quaternions have no limit to read and are not listed.
-    """
-    model = robot.model
-    lower, upper = np.array(model.lowerPositionLimit), np.array(model.upperPositionLimit)
-    names = []
-    for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
-        box = slice(joint.idx_q, joint.idx_q + joint.nq - _unit_block_size(joint))
-        if not (np.all(_is_real_limit(lower[box])) and np.all(_is_real_limit(upper[box]))):
-            names.append(name)
-    return tuple(names)
-
-
-def check_random_budget(count: int, nv: int, *, option: str = "--random") -> None:
-    """Refuse ``count`` random configurations of ``nv`` coordinates beyond the work budget.
-
-    The budget is count x nv <= 2,000,000 (``$GIMWATCH_MAX_RANDOM_WORK`` overrides it); it
-    is checked before anything is drawn or allocated.
-
-    Raises:
-        InputError: Over the budget, or the variable is not a positive integer.
-    """
-    text = os.environ.get(MAX_RANDOM_WORK_VARIABLE, "").strip()
-    budget = DEFAULT_MAX_RANDOM_WORK
-    if text:
-        if not text.isdigit() or int(text) < 1:
-            raise InputError(f"${MAX_RANDOM_WORK_VARIABLE}", "a positive integer", text)
-        budget = int(text)
-    if count * nv > budget:
-        raise InputError(
-            option,
-            f"at most {max(budget // nv, 1)} for nv = {nv} (count x nv <= {budget}; set "
-            f"${MAX_RANDOM_WORK_VARIABLE} to allow more)",
-            count,
-        )
-
-
-def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = None) -> np.ndarray:
-    """Configurations drawn uniformly within the joint limits, shape ``(count, nq)``.
-
-    Unbounded coordinates, and those whose limit is a placeholder (|limit| >= 1e3, see
-    :func:`placeholder_limit_joints`), are drawn in ±π rad (angles) or ±1 m (translations);
-    quaternions
-    and the unit complex numbers of continuous joints are drawn uniformly on their sphere.
-
-    Args:
-        robot: The robot.
-        count: Number of configurations, >= 1.
-        seed: Seed of NumPy's generator; the same seed gives the same configurations.
-    """
-    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
-        raise InputError("count", "a positive integer", count)
-    if count * robot.nq > MAX_RANDOM_NUMBERS:
-        limit = MAX_RANDOM_NUMBERS // robot.nq
-        raise InputError("count", f"at most {limit} for {robot.name} (nq = {robot.nq})", count)
-    if seed is not None and (
-        isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0
-    ):
-        raise InputError("seed", "None or an integer >= 0", seed)
-    model = robot.model
-    rng = np.random.default_rng(seed)
-    lower = np.array(model.lowerPositionLimit, dtype=float)
-    upper = np.array(model.upperPositionLimit, dtype=float)
-    qs = np.empty((count, model.nq))
-    for joint in model.joints[1:]:
-        start, stop = joint.idx_q, joint.idx_q + joint.nq
-        unit = _unit_block_size(joint)
-        box = slice(start, stop - unit)
-        default = (
-            _DEFAULT_ANGLE_RAD
-            if joint.shortname().startswith("JointModelR")
-            else (_DEFAULT_TRANSLATION_M)
-        )
-        lo = np.where(_is_real_limit(lower[box]), lower[box], -default)
-        hi = np.where(_is_real_limit(upper[box]), upper[box], default)
-        qs[:, box] = rng.uniform(lo, hi, size=(count, stop - unit - start))
-        if unit:
-            block = rng.standard_normal((count, unit))
-            qs[:, stop - unit : stop] = block / np.linalg.norm(block, axis=1, keepdims=True)
-    return qs
-
-
 #: |‖block‖ − 1| allowed for the unit blocks of a q given to the library functions.
 UNIT_NORM_TOLERANCE = 1e-6
 
@@ -587,7 +357,7 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
     if not np.all(np.isfinite(array)):
         raise InputError("q", "finite", array.tolist())
     for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
-        unit = _unit_block_size(joint)
+        unit = unit_block_size(joint)
         if unit:
             stop = joint.idx_q + joint.nq
             norm = float(np.linalg.norm(array[stop - unit : stop]))

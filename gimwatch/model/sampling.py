@@ -1,0 +1,143 @@
+"""Configurations drawn at random within a robot's joint limits, and the limits' placeholders.
+
+A joint limit of |limit| >= :data:`PLACEHOLDER_LIMIT` (or infinite) is a URDF writer's way of
+saying "unlimited"; such coordinates are drawn in ±π rad (angles) or ±1 m (translations).
+Quaternions and the unit complex numbers of continuous joints are drawn uniformly on their
+sphere.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from gimwatch.errors import InputError
+
+if TYPE_CHECKING:
+    from gimwatch.model.robots import Robot
+
+__all__ = [
+    "DEFAULT_MAX_RANDOM_WORK",
+    "MAX_RANDOM_NUMBERS",
+    "MAX_RANDOM_WORK_VARIABLE",
+    "PLACEHOLDER_LIMIT",
+    "check_random_budget",
+    "placeholder_limit_joints",
+    "random_configurations",
+    "unit_block_size",
+]
+
+_DEFAULT_ANGLE_RAD = np.pi
+_DEFAULT_TRANSLATION_M = 1.0
+#: random_configurations refuses to allocate more numbers than this (400 MB).
+MAX_RANDOM_NUMBERS = 50_000_000
+#: The most random configurations x velocity coordinates the command line analyses in one
+#: call (each an O(nv) to O(nv^3) analysis); ``$GIMWATCH_MAX_RANDOM_WORK`` overrides it.
+DEFAULT_MAX_RANDOM_WORK = 2_000_000
+MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
+
+
+def unit_block_size(joint: pin.JointModel) -> int:
+    """Size of the unit-norm part of a joint's q (4 for quaternions, 2 for unit complex)."""
+    if joint.nq == joint.nv:
+        return 0
+    kind = joint.shortname()
+    return 4 if ("Spherical" in kind or "FreeFlyer" in kind) else 2
+
+
+#: A joint limit this large (or infinite) is a placeholder for "unlimited" (URDF writers put
+#: 1e3 ... 1e16 there); random configurations then use ±π rad / ±1 m instead.
+PLACEHOLDER_LIMIT = 1e3
+
+
+def _is_real_limit(limit: np.ndarray) -> np.ndarray:
+    return np.isfinite(limit) & (np.abs(limit) < PLACEHOLDER_LIMIT)
+
+
+def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
+    """Joints with a coordinate whose limit is a placeholder (|limit| >= 1e3 or infinite).
+
+    :func:`random_configurations` draws those coordinates in ±π rad (angles) or ±1 m
+    (translations, the free-flyer's position included) instead. Continuous joints and
+    quaternions have no limit to read and are not listed.
+    """
+    model = robot.model
+    lower, upper = np.array(model.lowerPositionLimit), np.array(model.upperPositionLimit)
+    names = []
+    for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
+        box = slice(joint.idx_q, joint.idx_q + joint.nq - unit_block_size(joint))
+        if not (np.all(_is_real_limit(lower[box])) and np.all(_is_real_limit(upper[box]))):
+            names.append(name)
+    return tuple(names)
+
+
+def check_random_budget(count: int, nv: int, *, option: str = "--random") -> None:
+    """Refuse ``count`` random configurations of ``nv`` coordinates beyond the work budget.
+
+    The budget is count x nv <= 2,000,000 (``$GIMWATCH_MAX_RANDOM_WORK`` overrides it); it
+    is checked before anything is drawn or allocated.
+
+    Raises:
+        InputError: Over the budget, or the variable is not a positive integer.
+    """
+    text = os.environ.get(MAX_RANDOM_WORK_VARIABLE, "").strip()
+    budget = DEFAULT_MAX_RANDOM_WORK
+    if text:
+        if not text.isdigit() or int(text) < 1:
+            raise InputError(f"${MAX_RANDOM_WORK_VARIABLE}", "a positive integer", text)
+        budget = int(text)
+    if count * nv > budget:
+        raise InputError(
+            option,
+            f"at most {max(budget // nv, 1)} for nv = {nv} (count x nv <= {budget}; set "
+            f"${MAX_RANDOM_WORK_VARIABLE} to allow more)",
+            count,
+        )
+
+
+def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = None) -> np.ndarray:
+    """Configurations drawn uniformly within the joint limits, shape ``(count, nq)``.
+
+    Unbounded coordinates, and those whose limit is a placeholder (|limit| >= 1e3, see
+    :func:`placeholder_limit_joints`), are drawn in ±π rad (angles) or ±1 m (translations);
+    quaternions
+    and the unit complex numbers of continuous joints are drawn uniformly on their sphere.
+
+    Args:
+        robot: The robot.
+        count: Number of configurations, >= 1.
+        seed: Seed of NumPy's generator; the same seed gives the same configurations.
+    """
+    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
+        raise InputError("count", "a positive integer", count)
+    if count * robot.nq > MAX_RANDOM_NUMBERS:
+        limit = MAX_RANDOM_NUMBERS // robot.nq
+        raise InputError("count", f"at most {limit} for {robot.name} (nq = {robot.nq})", count)
+    if seed is not None and (
+        isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0
+    ):
+        raise InputError("seed", "None or an integer >= 0", seed)
+    model = robot.model
+    rng = np.random.default_rng(seed)
+    lower = np.array(model.lowerPositionLimit, dtype=float)
+    upper = np.array(model.upperPositionLimit, dtype=float)
+    qs = np.empty((count, model.nq))
+    for joint in model.joints[1:]:
+        start, stop = joint.idx_q, joint.idx_q + joint.nq
+        unit = unit_block_size(joint)
+        box = slice(start, stop - unit)
+        default = (
+            _DEFAULT_ANGLE_RAD
+            if joint.shortname().startswith("JointModelR")
+            else (_DEFAULT_TRANSLATION_M)
+        )
+        lo = np.where(_is_real_limit(lower[box]), lower[box], -default)
+        hi = np.where(_is_real_limit(upper[box]), upper[box], default)
+        qs[:, box] = rng.uniform(lo, hi, size=(count, stop - unit - start))
+        if unit:
+            block = rng.standard_normal((count, unit))
+            qs[:, stop - unit : stop] = block / np.linalg.norm(block, axis=1, keepdims=True)
+    return qs
