@@ -33,7 +33,7 @@ import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
 from gimwatch.errors import InputError, URDFError
-from gimwatch.metrics.conditioning import extreme_ratio
+from gimwatch.metrics.conditioning import extreme_ratio, warn_if_ill_conditioned
 from gimwatch.model.robots import (
     EXAMPLE_ROBOT_NOTES,
     PLACEHOLDER_LIMIT,
@@ -276,6 +276,8 @@ def crosscheck_robot(
         )
     if mj_model is None:
         errors["mujoco"] = None
+    if not singular_note:  # a singular M has its own label in the note
+        warn_if_ill_conditioned(kappa_max, where=f"{robot.name} (largest over {samples} samples)")
     compared = [errors[k] for k in ("gim", "diag", "tau", "backward", "mujoco")]
     passed = conditioned_ok and all(e <= tolerance for e in compared if e is not None)
     passed = passed and not any(

@@ -68,3 +68,50 @@ def test_cli_analyze_reports_one_stderr_line(tmp_path):
     lines = [line for line in run.stderr.splitlines() if "ill-conditioned" in line]
     assert len(lines) == 1 and lines[0].startswith("gimwatch: warning: "), run.stderr
     assert "Traceback" not in run.stderr and "warnings.warn" not in run.stderr
+
+
+def _ill_chain_urdf(tmp_path):
+    """A 1 mm, 22 µg tip on two paper rods: κ ≈ 2e14–4e14, κ·eps ≥ 0.05 but M still regular
+    (λmin well above nv·eps·λmax, so crosscheck compares q̈ instead of calling M singular)."""
+    from gimwatch.model.chains import write_chain_urdf
+
+    spec = chain_spec(3, mass_kg=[2.2, 2.2, 2.2e-8], length_m=[1.0, 1.0, 1e-3])
+    return write_chain_urdf(spec, tmp_path / "ill.urdf")
+
+
+def test_crosscheck_warns_once_with_the_largest_kappa(tmp_path):
+    from gimwatch.crosscheck import crosscheck_robot
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot(str(_ill_chain_urdf(tmp_path)))
+    with pytest.warns(IllConditionedWarning) as record:
+        result = crosscheck_robot(robot, samples=3, seed=0)
+    ill = [w for w in record if issubclass(w.category, IllConditionedWarning)]
+    assert len(ill) == 1 and "largest over 3 samples" in str(ill[0].message)
+    assert result.kappa_max * EPS >= ILL_CONDITIONED_KAPPA_EPS and "singular" not in result.note
+
+
+def test_survey_warns_per_ill_conditioned_robot_and_not_for_others(tmp_path):
+    from gimwatch.survey.run import run_survey
+
+    path = str(_ill_chain_urdf(tmp_path))
+    with pytest.warns(IllConditionedWarning) as record:
+        result = run_survey([path, "chain:4"], samples=5, seed=0)
+    ill = [str(w.message) for w in record if issubclass(w.category, IllConditionedWarning)]
+    assert len(ill) == 1 and ill[0].startswith("ill (largest over its samples): ")
+    assert max(r.quantiles["kappa"]["max"] for r in result.robots) * EPS >= 1e-2
+
+
+@pytest.mark.parametrize("command", ["crosscheck", "survey"])
+def test_cli_crosscheck_and_survey_print_one_warning_line(command, tmp_path):
+    path = str(_ill_chain_urdf(tmp_path))
+    argv = [command, path] + (
+        ["--samples", "3", "-o", str(tmp_path / "out")] if command == "survey" else []
+    )
+    run = subprocess.run(
+        [sys.executable, "-m", "gimwatch", *argv], capture_output=True, text=True, timeout=300
+    )
+    warning_lines = [line for line in run.stderr.splitlines() if "ill-conditioned" in line]
+    assert len(warning_lines) == 1 and warning_lines[0].startswith("gimwatch: warning: "), (
+        run.stderr
+    )

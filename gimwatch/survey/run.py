@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gimwatch.errors import ConditioningError, GimwatchError, InputError, RobotError
+from gimwatch.metrics.conditioning import warn_if_ill_conditioned
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.metrics.estimator_quality import correlations, estimator_quality
 from gimwatch.metrics.registry import GimState, evaluate
@@ -399,6 +400,9 @@ def run_survey(
         index = np.concatenate([np.arange(s, s + len(p["kappa"])) for s, p in parts])
         metrics = {key: np.concatenate([p[key] for _, p in parts]) for key in parts[0][1]}
         summary = _summarize(robot, note, index, metrics, qs)
+        warn_if_ill_conditioned(
+            float(np.max(metrics["kappa"])), where=f"{robot.name} (largest over its samples)"
+        )
         if trajectories is not None:
             summary = replace(summary, trajectories=_trajectory_statistics(robot, runs[k]))
         robots.append(summary)
