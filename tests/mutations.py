@@ -409,11 +409,9 @@ MUTANTS = (
     Mutant(
         "watch-scaled-recalibrates",
         "gimwatch/metrics/registry.py",
-        "        if not self.estimator.calibrated:\n"
-        "            self.estimator.calibrate(state.M)\n",
+        "        if not self.estimator.calibrated:  # t0",
         "        self.estimator = conditioning.ScaledDiagonalRatio()\n"
-        "        if not self.estimator.calibrated:\n"
-        "            self.estimator.calibrate(state.M)\n",
+        "        if not self.estimator.calibrated:  # t0",
         ("tests/test_watch.py",),
         "αδ recalibrated at every sample (then it equals κ, tuned after the fact)",
     ),

@@ -15,9 +15,10 @@ state computes the expensive quantities lazily, at most once, and only when a me
 * ``ldlt_pivots`` / ``udut_pivots`` — from the Cholesky factor of M, or (UDUᵀ) from the O(n)
   articulated-body factor of the linear-time state.
 
-Adding a metric: subclass :class:`Metric` (set ``name``, ``needs``, and ``__call__(state)``
-reading only what it needs from the state), add it to :data:`METRICS`, and test it against
-an independent value; ``gimwatch metrics``, scenes and the CLI read the registry. See
+Adding a metric: subclass :class:`Metric` (set ``name`` and ``full``, and write
+``__call__(state)`` reading only what it needs from the state), decorate it with
+:func:`register` (or list it in :data:`METRICS`), and test it against an independent value;
+``gimwatch metrics``, scenes, the watch and the CLI read the registry. See
 ``docs/contributing.md``.
 """
 
@@ -33,7 +34,7 @@ from gimwatch.metrics import conditioning
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
 
-__all__ = ["METRICS", "GimState", "Metric", "evaluate"]
+__all__ = ["METRICS", "GimState", "Metric", "evaluate", "register"]
 
 
 class GimState:
@@ -270,9 +271,10 @@ class ScaledDiagonalRatioMetric(Metric):
         self.estimator = conditioning.ScaledDiagonalRatio()
 
     def __call__(self, state):
-        if not self.estimator.calibrated:
-            self.estimator.calibrate(state.M)
-            return self.estimator(state.diag)
+        if not self.estimator.calibrated:  # t0: κ from the state, shared with a watched κ
+            kappa = conditioning.extreme_ratio(state.extremes)
+            alpha = kappa / conditioning.diagonal_ratio(state.diag)
+            self.estimator = conditioning.ScaledDiagonalRatio(alpha=alpha)
         return self.estimator.alpha * state.delta  # Eq. 15 on the O(n) δ
 
 
@@ -343,6 +345,14 @@ METRICS: dict[str, type[Metric]] = {
         Diagonal,
     )
 }
+
+
+def register(cls: type[Metric]) -> type[Metric]:
+    """Class decorator: add a metric to :data:`METRICS` under its ``name``."""
+    if cls.name in METRICS:
+        raise ValueError(f"metric {cls.name!r} is already registered")
+    METRICS[cls.name] = cls
+    return cls
 
 
 def evaluate(names, state: GimState, metrics: dict[str, Metric] | None = None) -> dict:

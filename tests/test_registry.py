@@ -1,0 +1,100 @@
+"""The metric registry: one definition per metric, the same value through every provider.
+
+References are computed here with plain NumPy from Pinocchio's M (eigvalsh, the diagonal, a
+Cholesky factor of M and of M with its coordinates reversed), independently of gimwatch's
+conditioning module; the O(n) path (DeNOC, no M formed) must agree with them.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from gimwatch.denoc import DenocModel
+from gimwatch.metrics.registry import METRICS, GimState, evaluate
+from gimwatch.model.robots import load_robot, random_configurations
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _references(M: np.ndarray) -> dict[str, float]:
+    values = np.linalg.eigvalsh(M)
+    forward = np.diag(np.linalg.cholesky(M)) ** 2
+    backward = np.diag(np.linalg.cholesky(M[::-1, ::-1])) ** 2
+    return {
+        "kappa": values[-1] / values[0],
+        "diagonal_ratio": np.diag(M).max() / np.diag(M).min(),
+        "pivot_ratio_forward": forward.max() / forward.min(),
+        "pivot_ratio_backward": backward.max() / backward.min(),
+    }
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "chain:12"])
+def test_every_provider_gives_the_reference_values(name):
+    robot = load_robot(name)
+    q = random_configurations(robot, 1, seed=3)[0]
+    M = pin.crba(robot.model, robot.model.createData(), q)
+    reference = _references(M)
+    crba = GimState(robot, robot.new_data(), q, full=True)
+    given = GimState(full=True, matrix=M)
+    for state in (crba, given):
+        got = evaluate(tuple(reference), state)
+        for key, value in reference.items():
+            assert got[key] == pytest.approx(value, rel=1e-10), key
+    model = DenocModel.from_urdf(robot.urdf_xml, source=robot.source, joint_order=robot.joint_names)
+    linear = GimState(
+        linear=model.state(q), lanczos=(0, 1e-12), to_public=model.to_public
+    )  # no M: diag, pivots and κ by O(n) recursions and Lanczos
+    got = evaluate(("kappa", "diagonal_ratio", "pivot_ratio_backward"), linear)
+    assert got["kappa"] == pytest.approx(reference["kappa"], rel=1e-9)
+    assert got["diagonal_ratio"] == pytest.approx(reference["diagonal_ratio"], rel=1e-12)
+    assert got["pivot_ratio_backward"] == pytest.approx(reference["pivot_ratio_backward"], rel=1e-9)
+
+
+def test_the_o_n_path_refuses_metrics_that_need_m():
+    robot = load_robot("chain:5")
+    model = DenocModel.from_urdf(robot.urdf_xml, source=robot.source, joint_order=robot.joint_names)
+    state = GimState(linear=model.state(np.zeros(5)), to_public=model.to_public)
+    with pytest.raises(Exception, match="never forms"):
+        evaluate(("pivot_ratio_forward",), state)
+
+
+def test_each_state_quantity_is_computed_once(monkeypatch):
+    from gimwatch.metrics import conditioning
+
+    calls = {"eig": 0}
+    original = conditioning.eigenvalues
+
+    def counting(M):
+        calls["eig"] += 1
+        return original(M)
+
+    monkeypatch.setattr(conditioning, "eigenvalues", counting)
+    M = np.diag([4.0, 2.0, 1.0]) + 0.1
+    evaluate(("kappa", "eigenvalues", "scaled_diagonal_ratio"), GimState(full=True, matrix=M))
+    assert calls["eig"] == 1
+
+
+def test_one_definition_of_the_ratios():
+    """κ, δ and the pivot ratios are one max/min (conditioning.extreme_ratio): no other module
+    divides a maximum by a minimum of eigenvalues, diagonals or pivots."""
+    pattern = re.compile(r"\.max\(\) / [\w.]*\.min\(\)|\[-1\] / [\w.]*\[0\]")
+    found = [
+        f"{path.relative_to(ROOT)}:{k}"
+        for path in sorted((ROOT / "gimwatch").rglob("*.py"))
+        for k, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if pattern.search(line)
+    ]
+    allowed = {"gimwatch/metrics/conditioning.py", "gimwatch/survey/trajectory.py"}  # κ spread
+    assert [f for f in found if f.split(":")[0] not in allowed] == [], found
+    assert sum(f.startswith("gimwatch/metrics/conditioning.py") for f in found) == 1
+
+
+def test_every_metric_documents_its_contract():
+    for name, cls in METRICS.items():
+        assert cls.name == name and cls.__doc__, name
+        assert isinstance(cls.full, bool) and isinstance(cls.vector, bool)
