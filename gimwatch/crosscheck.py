@@ -36,11 +36,11 @@ from gimwatch.errors import InputError, URDFError
 from gimwatch.metrics.conditioning import extreme_ratio, warn_if_ill_conditioned
 from gimwatch.model.robots import (
     EXAMPLE_ROBOT_NOTES,
-    PLACEHOLDER_LIMIT,
     Robot,
     placeholder_limit_joints,
     random_configurations,
 )
+from gimwatch.model.sampling import placeholder_note
 
 __all__ = ["CrossCheckResult", "crosscheck_robot", "denoc_model"]
 
@@ -269,11 +269,7 @@ def crosscheck_robot(
         notes.append(EXAMPLE_ROBOT_NOTES[robot.spec])
     placeholders = placeholder_limit_joints(robot)
     if placeholders:
-        shown = ", ".join(placeholders[:4]) + (", ..." if len(placeholders) > 4 else "")
-        notes.append(
-            f"placeholder limits (|limit| >= {PLACEHOLDER_LIMIT:g} or none) sampled in ±π rad / "
-            f"±1 m: {shown}"
-        )
+        notes.append(placeholder_note(placeholders))
     if mj_model is None:
         errors["mujoco"] = None
     if not singular_note:  # a singular M has its own label in the note

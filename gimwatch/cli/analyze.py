@@ -10,6 +10,7 @@ from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import InputError
 from gimwatch.metrics.analyze import analyze, choose_path
 from gimwatch.model.robots import DATA_NV_LIMIT
+from gimwatch.model.sampling import placeholder_note
 
 NAME = "analyze"
 #: More configurations than this would print a table nobody reads; use ``survey``.
@@ -91,6 +92,8 @@ def run(args: argparse.Namespace) -> int:
     )
     results = analysis.results
     first = results[0]
+    if analysis.placeholder_limits:
+        print(f"gimwatch: note: {placeholder_note(analysis.placeholder_limits)}", file=sys.stderr)
     if analysis.path == "denoc" and analysis.chosen:
         print(
             f"gimwatch: {first.robot} has nv = {first.nv} > {DATA_NV_LIMIT}: using the O(n) "
@@ -101,6 +104,8 @@ def run(args: argparse.Namespace) -> int:
     records = [{"config": i, **r.to_dict()} for i, r in enumerate(results)]
     if args.json:
         header = {"robot": first.robot, "nv": first.nv, "base": base, "method": first.method}
+        if analysis.placeholder_limits:  # random draws replaced these joints' limits
+            header["placeholder_limits"] = list(analysis.placeholder_limits)
         print(json_text({**header, "configurations": records}))
         return 0
     if args.csv:

@@ -24,6 +24,7 @@ from gimwatch.model.robots import (
     load_robot,
     neutral_configuration,
     parse_chain_spec,
+    placeholder_limit_joints,
     random_configurations,
 )
 
@@ -43,11 +44,14 @@ class Analysis:
         results: One :class:`GimAnalysis` per configuration.
         path: ``"crba"`` (dense M) or ``"denoc"`` (O(n), no M).
         chosen: True when ``auto`` chose the path (the caller may want to say why).
+        placeholder_limits: Joints whose placeholder limits (|limit| >= 1e3 or none) random
+            configurations replaced by ±π rad / ±1 m; empty when none were drawn.
     """
 
     results: tuple[GimAnalysis, ...]
     path: str
     chosen: bool
+    placeholder_limits: tuple[str, ...] = ()
 
 
 def choose_path(spec: str, *, floating: bool = False, backend: str = "auto") -> str:
@@ -155,6 +159,7 @@ def analyze(
     path = choose_path(spec, floating=floating, backend=backend)
     if metrics is not None and path != "denoc":
         raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
+    placeholders: tuple[str, ...] = ()
     if path == "denoc":
         results = _linear(spec, q, random, seed, metrics, floating, key)
     else:
@@ -172,4 +177,11 @@ def analyze(
         )
         data = robot.new_data()
         results = [analyze_configuration(robot, np.asarray(x), data=data) for x in qs]
-    return Analysis(results=tuple(results), path=path, chosen=backend == "auto")
+        if random is not None:
+            placeholders = placeholder_limit_joints(robot)
+    return Analysis(
+        results=tuple(results),
+        path=path,
+        chosen=backend == "auto",
+        placeholder_limits=placeholders,
+    )

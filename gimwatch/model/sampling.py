@@ -26,6 +26,7 @@ __all__ = [
     "PLACEHOLDER_LIMIT",
     "check_random_budget",
     "placeholder_limit_joints",
+    "placeholder_note",
     "random_configurations",
     "unit_block_size",
 ]
@@ -141,3 +142,14 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
             block = rng.standard_normal((count, unit))
             qs[:, stop - unit : stop] = block / np.linalg.norm(block, axis=1, keepdims=True)
     return qs
+
+
+def placeholder_note(joints: tuple[str, ...]) -> str:
+    """The one-line note that says which joints' placeholder limits were replaced, or ""."""
+    if not joints:
+        return ""
+    shown = ", ".join(joints[:4]) + (", ..." if len(joints) > 4 else "")
+    return (
+        f"placeholder limits (|limit| >= {PLACEHOLDER_LIMIT:g} or none) sampled in ±π rad / "
+        f"±1 m: {shown}"
+    )

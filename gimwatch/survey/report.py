@@ -103,6 +103,7 @@ def survey_record(result: SurveyResult, *, wall_time_s: float | None = None) -> 
                 "nv": r.nv,
                 "floating": r.floating,
                 "note": r.note,
+                "placeholder_limits": list(r.placeholder_limits),
                 "samples": r.samples,
                 "alpha": r.alpha,
                 "quantiles": r.quantiles,
@@ -347,6 +348,17 @@ def _report(result: SurveyResult, wall_time_s: float | None) -> str:
         for w in r.worst:
             kappa, delta = _g(w.kappa, 4), _g(w.diagonal_ratio, 4)
             lines.append(f"| {r.name} | {w.sample} | {kappa} | {delta} |")
+    placeholders = [r for r in result.robots if r.placeholder_limits]
+    if placeholders:
+        lines += [
+            "",
+            "## Placeholder joint limits",
+            "",
+            'Limits of |limit| >= 1e3 (or none) stand for "unlimited"; the random samples draw '
+            "those coordinates in ±π rad (angles) or ±1 m (translations) instead.",
+            "",
+        ]
+        lines += [f"- {r.name}: {', '.join(r.placeholder_limits)}" for r in placeholders]
     lines += _trajectory_section(result)
     if result.failures:
         lines += ["", "## Robots not surveyed", "", "| robot | stage | reason |", "|---|---|---|"]

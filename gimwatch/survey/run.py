@@ -36,7 +36,13 @@ from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.metrics.estimator_quality import correlations, estimator_quality
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.inertia import gim
-from gimwatch.model.robots import Robot, example_robot_names, load_robot, neutral_configuration
+from gimwatch.model.robots import (
+    Robot,
+    example_robot_names,
+    load_robot,
+    neutral_configuration,
+    placeholder_limit_joints,
+)
 from gimwatch.model.robots import random_configurations as _random_configurations
 from gimwatch.survey.sweep import Task, run_sweep
 from gimwatch.survey.trajectory import (
@@ -192,6 +198,8 @@ class RobotSurvey:
         lambda_min_on_min_diagonal: Fraction of samples where λmin's eigenvector is
             dominated by the coordinate that holds the smallest diagonal entry.
         trajectories: Along-trajectory statistics (None without trajectories).
+        placeholder_limits: Joints whose placeholder limits (|limit| >= 1e3 or none) the
+            random samples replaced by ±π rad / ±1 m.
     """
 
     name: str
@@ -212,6 +220,7 @@ class RobotSurvey:
     extreme_dofs: dict[str, tuple[str, float]]
     lambda_min_on_min_diagonal: float
     trajectories: TrajectoryStatistics | None = None
+    placeholder_limits: tuple[str, ...] = ()
 
     @property
     def samples(self) -> int:
@@ -289,6 +298,7 @@ def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> Robot
         worst=worst,
         extreme_dofs=extreme,
         lambda_min_on_min_diagonal=aligned,
+        placeholder_limits=placeholder_limit_joints(robot),
     )
 
 
