@@ -83,6 +83,12 @@ def _configurations(q, random, seed, nq, neutral, draw, robot=None, key="q", spe
     return [q]
 
 
+def _robot_configurations(robot, q, random, seed, key, spec) -> list:
+    draw = lambda k, s: random_configurations(robot, k, seed=s)  # noqa: E731
+    neutral = neutral_configuration(robot)
+    return _configurations(q, random, seed, robot.nq, neutral, draw, robot, key=key, spec=spec)
+
+
 def _linear(spec, q, random, seed, metrics, floating, key) -> list[GimAnalysis]:
     """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
     from gimwatch.denoc import DenocModel
@@ -116,17 +122,7 @@ def _linear(spec, q, random, seed, metrics, floating, key) -> list[GimAnalysis]:
             robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
         )
         name = robot.name
-        qs = _configurations(
-            q,
-            random,
-            seed,
-            robot.nq,
-            neutral_configuration(robot),
-            lambda k, s: random_configurations(robot, k, seed=s),
-            robot,
-            key=key,
-            spec=spec,
-        )
+        qs = _robot_configurations(robot, q, random, seed, key, spec)
     return [analyze_linear(model, x, name=name, metrics=metrics, seed=seed) for x in qs]
 
 
@@ -164,17 +160,7 @@ def analyze(
         results = _linear(spec, q, random, seed, metrics, floating, key)
     else:
         robot = load_robot(spec, floating=floating, max_nv=DATA_NV_LIMIT)
-        qs = _configurations(
-            q,
-            random,
-            seed,
-            robot.nq,
-            neutral_configuration(robot),
-            lambda k, s: random_configurations(robot, k, seed=s),
-            robot,
-            key=key,
-            spec=spec,
-        )
+        qs = _robot_configurations(robot, q, random, seed, key, spec)
         data = robot.new_data()
         results = [analyze_configuration(robot, np.asarray(x), data=data) for x in qs]
         if random is not None:

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import math
 import re
-import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from gimwatch.errors import URDFError, URDFWarning
+from gimwatch.errors import URDFError
+from gimwatch.model.urdf_values import check_principal_moments, warn_doubtful_inertias
 
 __all__ = ["MJCF_JOINT_TYPES", "check_mjcf"]
 
@@ -70,15 +70,7 @@ def _check_inertial(values: dict, source: str, where: str) -> bool:
         moments = np.sort(values["diaginertia"])
     else:
         return True
-    if moments[0] < -1e-12 * max(1.0, abs(moments[-1])):
-        shown = ", ".join(f"{m:.4g}" for m in moments)
-        raise URDFError(
-            source,
-            f"inertia is not positive semi-definite: principal moments {shown} kg m^2",
-            element=where,
-        )
-    a, b, c = moments
-    return bool(a + b >= c * (1 - 1e-6) - 1e-12)
+    return check_principal_moments(moments, source=source, where=where)
 
 
 def check_mjcf(xml: str, source: str) -> None:
@@ -133,13 +125,4 @@ def check_mjcf(xml: str, source: str) -> None:
                         )
             elif element.tag == "inertial" and not _check_inertial(values, source, where):
                 doubtful.append(body.get("name", "(unnamed)"))
-    if doubtful:
-        shown = ", ".join(doubtful[:4]) + (", ..." if len(doubtful) > 4 else "")
-        warnings.warn(
-            URDFWarning(
-                f"{source}: {len(doubtful)} body(ies) have principal moments of inertia that "
-                f"violate the triangle inequality a + b >= c ({shown}); no rigid body has "
-                "such an inertia, so the GIM computed from it is suspect"
-            ),
-            stacklevel=3,
-        )
+    warn_doubtful_inertias(source, doubtful, kind="body", stacklevel=3)

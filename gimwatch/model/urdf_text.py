@@ -13,7 +13,11 @@ import warnings
 import xml.etree.ElementTree as ET
 
 from gimwatch.errors import URDFError, URDFWarning
-from gimwatch.model.urdf_values import check_joint_values, check_link_values
+from gimwatch.model.urdf_values import (
+    check_joint_values,
+    check_link_values,
+    warn_doubtful_inertias,
+)
 
 __all__ = ["DEFAULT_MAX_LINKS", "MAX_TAG_CHARS", "check_urdf", "max_links", "parse_urdf_xml"]
 
@@ -152,16 +156,7 @@ def check_urdf(xml: str, source: str) -> ET.Element:
     for joint in root.findall("joint"):
         check_joint_values(joint, source)
     _check_mimics(root, source)
-    if doubtful:
-        shown = ", ".join(doubtful[:4]) + (", ..." if len(doubtful) > 4 else "")
-        warnings.warn(
-            URDFWarning(
-                f"{source}: {len(doubtful)} link(s) have principal moments of inertia that "
-                f"violate the triangle inequality a + b >= c ({shown}); no rigid body has "
-                "such an inertia, so the GIM computed from it is suspect"
-            ),
-            stacklevel=2,
-        )
+    warn_doubtful_inertias(source, doubtful, kind="link", stacklevel=2)
     return root
 
 

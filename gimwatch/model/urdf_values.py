@@ -24,11 +24,12 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from gimwatch.errors import URDFError
+from gimwatch.errors import URDFError, URDFWarning
 
 __all__ = [
     "INERTIA_ATOL_KG_M2",
@@ -37,6 +38,8 @@ __all__ = [
     "SUPPORTED_JOINT_TYPES",
     "check_joint_values",
     "check_link_values",
+    "check_principal_moments",
+    "warn_doubtful_inertias",
 ]
 
 #: Joint types gimwatch models (Pinocchio and DeNOC alike).
@@ -181,6 +184,18 @@ def check_link_values(link: ET.Element, source: str) -> bool:
         for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
     )
     moments = np.linalg.eigvalsh(np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]))
+    return check_principal_moments(moments, source=source, where=where)
+
+
+def check_principal_moments(moments: np.ndarray, *, source: str, where: str) -> bool:
+    """Principal moments ``a <= b <= c`` (kg m²) of a body's inertia about its centre of mass.
+
+    Returns:
+        False when they violate the triangle inequality ``a + b >= c`` (doubtful, usable).
+
+    Raises:
+        URDFError: A clearly negative moment (the inertia is not positive semi-definite).
+    """
     if moments[0] < -(INERTIA_ATOL_KG_M2 + INERTIA_RTOL * abs(moments[-1])):
         shown = ", ".join(f"{m:.4g}" for m in moments)
         raise URDFError(
@@ -190,6 +205,25 @@ def check_link_values(link: ET.Element, source: str) -> bool:
         )
     a, b, c = moments
     return bool(a + b >= c * (1 - INERTIA_RTOL) - 1e-12)
+
+
+def warn_doubtful_inertias(source: str, names: list[str], *, kind: str, stacklevel: int) -> None:
+    """Issue one :class:`~gimwatch.errors.URDFWarning` naming the doubtful bodies.
+
+    ``names`` are the links or bodies (``kind``) whose principal moments of inertia violate
+    the triangle inequality; nothing is issued when there are none.
+    """
+    if not names:
+        return
+    shown = ", ".join(names[:4]) + (", ..." if len(names) > 4 else "")
+    warnings.warn(
+        URDFWarning(
+            f"{source}: {len(names)} {kind}(s) have principal moments of inertia that "
+            f"violate the triangle inequality a + b >= c ({shown}); no rigid body has "
+            "such an inertia, so the GIM computed from it is suspect"
+        ),
+        stacklevel=stacklevel + 1,
+    )
 
 
 def check_joint_values(joint: ET.Element, source: str) -> None:
