@@ -67,8 +67,9 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
     from gimwatch.stress.reference_tree import TreeReference
     from gimwatch.stress.suite import StressResult, run_stress
+    from gimwatch.survey.records import RobotFailure, RobotSurvey, SurveyResult
     from gimwatch.survey.report import write_survey
-    from gimwatch.survey.run import RobotFailure, RobotSurvey, SurveyResult, run_survey
+    from gimwatch.survey.run import run_survey
 
 #: Public name -> the module that defines it (imported on first access).
 _EXPORTS: dict[str, str] = {
@@ -88,15 +89,15 @@ _EXPORTS: dict[str, str] = {
     "PlanarChainReference": "gimwatch.stress.reference_planar",
     "Robot": "gimwatch.model.robots",
     "RobotError": "gimwatch.errors",
-    "RobotFailure": "gimwatch.survey.run",
-    "RobotSurvey": "gimwatch.survey.run",
+    "RobotFailure": "gimwatch.survey.records",
+    "RobotSurvey": "gimwatch.survey.records",
     "ScaledDiagonalRatio": "gimwatch.metrics.conditioning",
     "Scene": "gimwatch.simulation.scene",
     "SceneError": "gimwatch.errors",
     "Simulation": "gimwatch.simulation.simulate",
     "SimulationError": "gimwatch.errors",
     "StressResult": "gimwatch.stress.suite",
-    "SurveyResult": "gimwatch.survey.run",
+    "SurveyResult": "gimwatch.survey.records",
     "Trajectory": "gimwatch.simulation.simulate",
     "TreeReference": "gimwatch.stress.reference_tree",
     "URDFError": "gimwatch.errors",
