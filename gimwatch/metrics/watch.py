@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -31,6 +30,7 @@ from gimwatch.metrics.alarm import (
     check_on_alarm,
     warn_alarm,
 )
+from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
 from gimwatch.model.inertia import gim, gim_diagonal
@@ -539,53 +539,3 @@ class Watch:
         from gimwatch.output.dataframe import watch_frame
 
         return watch_frame(self.arrays())
-
-
-@dataclass(frozen=True)
-class EstimatorQuality:
-    """How well δ tracks κ along a run (α from t0 only, never tuned).
-
-    Attributes:
-        samples: Number of samples compared.
-        alpha: α = κ(t0)/δ(t0) (Eq. 15).
-        pearson_log: Pearson correlation of log δ vs log κ.
-        spearman: Spearman rank correlation of δ vs κ.
-        median_relative_error: median |αδ - κ| / κ.
-        max_relative_error: max |αδ - κ| / κ.
-        max_kappa: Largest κ seen.
-        max_scaled_diagonal_ratio: Largest αδ seen.
-    """
-
-    samples: int
-    alpha: float
-    pearson_log: float
-    spearman: float
-    median_relative_error: float
-    max_relative_error: float
-    max_kappa: float
-    max_scaled_diagonal_ratio: float
-
-
-def estimator_quality(kappa: np.ndarray, delta: np.ndarray) -> EstimatorQuality | None:
-    """Compare δ (and αδ, α = κ₀/δ₀) with κ along a series; None with fewer than 3 samples."""
-    from scipy import stats
-
-    kappa, delta = np.asarray(kappa, dtype=float), np.asarray(delta, dtype=float)
-    if kappa.size < 3:
-        return None
-    alpha = kappa[0] / delta[0]
-    scaled = alpha * delta
-    error = np.abs(scaled - kappa) / kappa
-    constant = np.ptp(np.log(delta)) == 0 or np.ptp(np.log(kappa)) == 0
-    pearson = math.nan if constant else float(stats.pearsonr(np.log(delta), np.log(kappa))[0])
-    spearman = math.nan if constant else float(stats.spearmanr(delta, kappa)[0])
-    return EstimatorQuality(
-        samples=int(kappa.size),
-        alpha=float(alpha),
-        pearson_log=pearson,
-        spearman=spearman,
-        median_relative_error=float(np.median(error)),
-        max_relative_error=float(np.max(error)),
-        max_kappa=float(np.max(kappa)),
-        max_scaled_diagonal_ratio=float(np.max(scaled)),
-    )
