@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -154,28 +155,15 @@ class Watch:
     # -- constructors ----------------------------------------------------------------------
     @classmethod
     def from_model(
-        cls,
-        model: pin.Model,
-        metrics: tuple[str, ...] = DEFAULT_METRICS,
-        *,
-        alarm_metric: str | None = None,
-        alarm_threshold: float | None = None,
-        on_alarm: Callable[[Alarm], object] | None = None,
-        warn: bool | None = None,
+        cls, model: pin.Model, metrics: tuple[str, ...] = DEFAULT_METRICS, **options: Any
     ) -> Watch:
         """A watch on a ``pinocchio.Model`` (M from Pinocchio's CRBA; δ without forming M).
 
-        Sample with :meth:`sample` (``q`` of length ``model.nq``). Other arguments as in
-        :class:`Watch`.
+        Sample with :meth:`sample` (``q`` of length ``model.nq``). ``options``: the alarm
+        arguments of :class:`Watch` (``alarm_metric``, ``alarm_threshold``, ``on_alarm``,
+        ``warn``).
         """
-        return cls(
-            robot_from_model(model),
-            metrics,
-            alarm_metric=alarm_metric,
-            alarm_threshold=alarm_threshold,
-            on_alarm=on_alarm,
-            warn=warn,
-        )
+        return cls(robot_from_model(model), metrics, **options)
 
     @classmethod
     def from_mujoco(
@@ -186,10 +174,7 @@ class Watch:
         *,
         robot: Robot | pin.Model | None = None,
         armature: bool = True,
-        alarm_metric: str | None = None,
-        alarm_threshold: float | None = None,
-        on_alarm: Callable[[Alarm], object] | None = None,
-        warn: bool | None = None,
+        **options: Any,
     ) -> Watch:
         """A watch on a MuJoCo ``MjModel``/``MjData`` pair (M from ``mujoco.mj_fullM``).
 
@@ -197,18 +182,11 @@ class Watch:
         the step started); ``sample(t, qpos)`` computes M at ``qpos`` without touching
         ``data``. ``robot`` (a gimwatch Robot or ``pinocchio.Model``) maps MuJoCo's joints by
         name into its coordinates; ``armature=False`` removes MuJoCo's ``dof_armature`` from
-        the diagonal. See :class:`~gimwatch.metrics.watch_sources.MujocoSource`.
+        the diagonal (see :class:`~gimwatch.metrics.watch_sources.MujocoSource`).
+        ``options``: the alarm arguments of :class:`Watch`.
         """
         source = MujocoSource(model, data, robot=robot, armature=armature)
-        return cls(
-            None,
-            metrics,
-            alarm_metric=alarm_metric,
-            alarm_threshold=alarm_threshold,
-            on_alarm=on_alarm,
-            warn=warn,
-            dynamics=source,
-        )
+        return cls(None, metrics, dynamics=source, **options)
 
     @classmethod
     def from_matrices(
@@ -217,21 +195,13 @@ class Watch:
         metrics: tuple[str, ...] = DEFAULT_METRICS,
         *,
         dof_names: tuple[str, ...] | None = None,
-        alarm_metric: str | None = None,
-        alarm_threshold: float | None = None,
-        on_alarm: Callable[[Alarm], object] | None = None,
-        warn: bool | None = None,
+        **options: Any,
     ) -> Watch:
-        """A watch fed by hand: :meth:`sample_matrix` (M) or :meth:`sample_diagonal` (diag M)."""
-        return cls(
-            None,
-            metrics,
-            alarm_metric=alarm_metric,
-            alarm_threshold=alarm_threshold,
-            on_alarm=on_alarm,
-            warn=warn,
-            dynamics=GivenMatrix(nv, dof_names),
-        )
+        """A watch fed by hand: :meth:`sample_matrix` (M) or :meth:`sample_diagonal` (diag M).
+
+        ``options``: the alarm arguments of :class:`Watch`.
+        """
+        return cls(None, metrics, dynamics=GivenMatrix(nv, dof_names), **options)
 
     # -- sampling --------------------------------------------------------------------------
     def sample(self, t: float, q: npt.ArrayLike | None = None) -> Alarm | None:
