@@ -2,19 +2,21 @@
 
 Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
 
-* ``tracker_samples`` — along swinging chains (the paper's rods, straight and horizontal at rest,
-  gravity in the plane; RK4 at 1 ms on DeNOC, a sample every 10 ms for 0.5 s), per method
-  and n: median time per sample (each sample timed once, the first excluded), products per
-  sample (median, max), cold-start fallbacks, and the max relative error of κ against the
-  dense reference: λmax from ``eigvalsh`` of CRBA's M and λmin from ``eigvalsh`` of
-  Pinocchio's ``computeMinverse`` (each the largest eigenvalue of its matrix, so float64
-  resolves it even at κ ~ 1e11, where the plain dense κ = eig(M) has lost its digits — its
-  own error is listed). Methods: the tracker (:class:`gimwatch.metrics.tracker.KappaTracker`
-  on DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the
-  watch's previous matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started
-  from the previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need
-  ~45 GB) and dense κ means nothing (eps·κ ≈ 1e-3): the tracker is compared with cold-start
-  Lanczos at 1e-10 on DeNOC's operators (:func:`gimwatch.denoc.matrix_free_kappa`).
+* ``tracker_samples`` — along swinging chains (the paper's rods, straight and horizontal at
+  rest, gravity in the plane; RK4 at 1 ms on DeNOC, a sample every 10 ms for 0.5 s), per
+  method and n: median time per sample (each sample timed once, the first excluded),
+  products per sample (median, max), O(n) factorizations per sample (median; the tracker's
+  shift-invert factors M − σ·1 once, more when λmin fell below the shift), cold-start
+  fallbacks, and the max relative error of κ against the dense reference: λmax from
+  ``eigvalsh`` of CRBA's M and λmin from ``eigvalsh`` of Pinocchio's ``computeMinverse``
+  (each the largest eigenvalue of its matrix, so float64 resolves it even at κ ~ 1e11, where
+  the plain dense κ = eig(M) has lost its digits — its own error is listed). Methods: the
+  tracker (:class:`gimwatch.metrics.tracker.KappaTracker` on DeNOC's lean products,
+  tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's previous
+  matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the previous
+  eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
+  means nothing (eps·κ ≈ 1e-3): the tracker is compared with cold-start Lanczos at 1e-10 on
+  DeNOC's operators (:func:`gimwatch.denoc.matrix_free_kappa`).
 * ``tracker_claim`` — along the paper's own trajectories (``scenes/chain_{4,10,20}.toml``): δ, αδ
   (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch metric: median cost
   of one :meth:`~gimwatch.metrics.watch.Watch.sample` and the median / max relative error
@@ -74,6 +76,7 @@ TRACKER_COLUMNS = (
     "time_us",
     "products_median",
     "products_max",
+    "factors_median",
     "fallbacks",
     "max_rel_error",
     "dense_us",
@@ -165,6 +168,7 @@ def _tracker_rows(context: BenchContext, table: Table, n: int) -> None:
     tracked, tracker_us = _per_sample(tracker.sample, qs)
     kappa = np.array([r.kappa for r in tracked])
     products = [r.products for r in tracked[1:]]
+    factors = float(np.median([r.factors for r in tracked[1:]]))
     fallbacks = sum(r.fallback == "cold" for r in tracked)
     robot = load_robot(f"chain:{n}", max_nv=None) if n <= 500 else None
     data = data_if_it_fits(robot) if robot is not None else None
@@ -199,6 +203,7 @@ def _tracker_rows(context: BenchContext, table: Table, n: int) -> None:
             samples=len(qs),
             products_median=float(np.median(counts)),
             products_max=int(np.max(counts)),
+            factors_median=factors if row["method"] == "tracker" else 0.0,
             fallbacks=fallbacks if row["method"] == "tracker" else 0,
             dense_us=dense_us,
             vs_dense=row["time_us"] / dense_us,
@@ -335,6 +340,7 @@ def run(context: BenchContext) -> SectionResult:
                 "time_us": "µs / sample",
                 "products_median": "products (median)",
                 "products_max": "products (max)",
+                "factors_median": "factorizations (median)",
                 "fallbacks": "cold fallbacks",
                 "max_rel_error": "max rel. error",
                 "vs_dense": "/ CRBA+eigvalsh",
