@@ -142,10 +142,11 @@ def test_compiled_path_recovers_from_a_jump_by_a_cold_start():
         assert result.kappa == pytest.approx(values[-1] / values[0], rel=RTOL)
         fallbacks.append(result.fallback)
     assert fallbacks == ["start", "", "cold", ""]
+    # the eigenvectors carried over: a Ritz residual ‖r‖ ~ sqrt(rtol · θ · gap) gives θ to rtol
     top, low = tracker.eigenvectors()
     M = pin.crba(robot.model, data, np.full(10, 1.001))
-    assert np.linalg.norm(M @ top - (top @ M @ top) * top) <= 1e-6 * np.linalg.norm(M)
-    assert abs(low @ np.linalg.eigh(M)[1][:, 0]) == pytest.approx(1.0, abs=1e-6)
+    assert np.linalg.norm(M @ top - (top @ M @ top) * top) <= 1e-4 * np.linalg.norm(M)
+    assert abs(low @ np.linalg.eigh(M)[1][:, 0]) == pytest.approx(1.0, abs=1e-8)
 
 
 def test_tracker_leaves_the_lean_model_configuration_alone():
