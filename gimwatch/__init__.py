@@ -16,6 +16,7 @@ from gimwatch._version import __version__
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports
     from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
     from gimwatch.denoc import DenocModel
+    from gimwatch.denoc.linear import MatrixFreeKappa
     from gimwatch.errors import (
         BackendWarning,
         ConditioningError,
@@ -44,13 +45,13 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
         udut_pivots,
     )
     from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
+    from gimwatch.metrics.estimator_quality import estimator_quality
     from gimwatch.metrics.matrix_free import (
-        MatrixFreeKappa,
         gim_inverse_operator,
         gim_operator,
         kappa_matrix_free,
     )
-    from gimwatch.metrics.watch import Watch, estimator_quality
+    from gimwatch.metrics.watch import Watch
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
@@ -82,7 +83,7 @@ _EXPORTS: dict[str, str] = {
     "GimwatchWarning": "gimwatch.errors",
     "IllConditionedWarning": "gimwatch.errors",
     "InputError": "gimwatch.errors",
-    "MatrixFreeKappa": "gimwatch.metrics.matrix_free",
+    "MatrixFreeKappa": "gimwatch.denoc.linear",
     "OutputError": "gimwatch.errors",
     "PlanarChainReference": "gimwatch.stress.reference_planar",
     "Robot": "gimwatch.model.robots",
@@ -109,7 +110,7 @@ _EXPORTS: dict[str, str] = {
     "crosscheck_robot": "gimwatch.crosscheck",
     "diagonal_ratio": "gimwatch.metrics.conditioning",
     "eigenvalues": "gimwatch.metrics.conditioning",
-    "estimator_quality": "gimwatch.metrics.watch",
+    "estimator_quality": "gimwatch.metrics.estimator_quality",
     "example_robot_names": "gimwatch.model.robots",
     "generate_chain_urdf": "gimwatch.model.chains",
     "gim": "gimwatch.model.inertia",

@@ -32,7 +32,35 @@ def entry_point() -> None:
     except KeyboardInterrupt:
         print("gimwatch: interrupted", file=sys.stderr)
         status = 128 + (_received[0] if _received else signal.SIGINT)
+    _forget_handled_interrupt()
+    for signum in (signal.SIGINT, signal.SIGTERM):  # the work is done: a late signal ends
+        if signal.getsignal(signum) is not signal.SIG_IGN:  # the shutdown, without a traceback
+            signal.signal(signum, _exit_now)
     sys.exit(status)
+
+
+def _exit_now(signum, frame):
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(128 + signum)
+
+
+def _forget_handled_interrupt() -> None:
+    """Clear CPython's "KeyboardInterrupt went unhandled" flag: it was handled.
+
+    The flag is set when a KeyboardInterrupt leaves Python code that C code ran (an import
+    through a C extension's bindings), even if Python code caught it further up; on exit,
+    CPython then kills the process with SIGINT instead of returning the status.
+    """
+    try:
+        import ctypes
+
+        ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
+    except (ImportError, AttributeError, ValueError, OSError):  # another Python: nothing to do
+        pass
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
+from gimwatch.errors import InputError, URDFError
 from gimwatch.model.robots import (
     EXAMPLE_ROBOT_NOTES,
     PLACEHOLDER_LIMIT,
@@ -105,6 +106,31 @@ def denoc_model(robot: Robot) -> DenocModel:
     )
 
 
+def check_tolerance(tolerance: float, name: str = "tolerance") -> float:
+    """A relative tolerance must be a number in (0, 1): inf or 1 would pass every error."""
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating)):
+        raise InputError(name, "a number > 0 and < 1", tolerance)
+    if not 0 < tolerance < 1:
+        raise InputError(name, "a number > 0 and < 1", tolerance)
+    return float(tolerance)
+
+
+def _worst(current: float, error: float) -> float:
+    """The larger error; NaN wins (``max`` would keep 0.0 against NaN), so it never passes."""
+    return error if np.isnan(error) or error > current else current
+
+
+def _finite(robot: Robot, what: str, value: np.ndarray) -> np.ndarray:
+    """Refuse a non-finite reference quantity (an overflow in the model) naming the file."""
+    if not np.all(np.isfinite(value)):
+        raise URDFError(
+            robot.source,
+            f"Pinocchio's {what} is not finite (inf or NaN): a mass, inertia or length in the "
+            "model is too large",
+        )
+    return value
+
+
 def _relative(x: np.ndarray, reference: np.ndarray) -> float:
     scale = float(np.linalg.norm(reference))
     return float(np.linalg.norm(x - reference)) / (scale if scale > 0 else 1.0)
@@ -159,8 +185,11 @@ def crosscheck_robot(
         peer: ``"mujoco"`` to compare MuJoCo's ``mj_fullM`` with ``pinocchio.crba`` too.
 
     Raises:
+        InputError: ``tolerance`` is not a number in (0, 1).
+        URDFError: Pinocchio's M(q) is not finite (an overflow in the model).
         MujocoRefusal: MuJoCo refuses an inertia of the robot (the link is named).
     """
+    tolerance = check_tolerance(tolerance)
     model, data = robot.model, robot.new_data()
     use_denoc = bool(robot.urdf_xml)
     peer = "mujoco" if not use_denoc else peer
@@ -181,7 +210,7 @@ def crosscheck_robot(
     for q in random_configurations(robot, samples, seed=seed):
         v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
         upper = np.triu(pin.crba(model, data, q))
-        M_ref = upper + np.triu(upper, 1).T
+        M_ref = _finite(robot, "mass matrix M(q)", upper + np.triu(upper, 1).T)
         eigenvalues = np.linalg.eigvalsh(M_ref)
         rank_deficient = eigenvalues[0] <= robot.nv * _EPS * eigenvalues[-1]
         kappa = np.inf if rank_deficient else eigenvalues[-1] / eigenvalues[0]
@@ -190,7 +219,7 @@ def crosscheck_robot(
             from gimwatch.model.mujoco_model import pinocchio_mass_matrix
 
             M_mj = pinocchio_mass_matrix(robot, mj_model, q)
-            errors["mujoco"] = max(errors["mujoco"], _relative(M_mj, M_ref))
+            errors["mujoco"] = _worst(errors["mujoco"], _relative(M_mj, M_ref))
         if rank_deficient and not singular_note:
             singular_note = (
                 f"M(q) is singular at a sample (λmin = {eigenvalues[0]:.3g} <= nv·ε·λmax = "
@@ -199,31 +228,31 @@ def crosscheck_robot(
             )
         if dm is None:
             continue
-        errors["gim"] = max(errors["gim"], _relative(dm.gim(q), M_ref))
-        errors["diag"] = max(errors["diag"], _relative(dm.gim_diagonal(q), np.diag(M_ref)))
+        errors["gim"] = _worst(errors["gim"], _relative(dm.gim(q), M_ref))
+        errors["diag"] = _worst(errors["diag"], _relative(dm.gim_diagonal(q), np.diag(M_ref)))
         tau_ref = np.array(pin.rnea(model, data, q, v, a))
-        errors["tau"] = max(errors["tau"], _relative(dm.inverse_dynamics(q, v, a), tau_ref))
+        errors["tau"] = _worst(errors["tau"], _relative(dm.inverse_dynamics(q, v, a), tau_ref))
         pin.crba(model, data, q)
         pin.cholesky.decompose(model, data)
         pivots = dm.forward_dynamics_pivots(q)
         if rank_deficient:
             pivot_error, _ = _pivot_error(pivots, np.array(data.D))
-            errors["pivots"] = max(errors["pivots"], pivot_error)
+            errors["pivots"] = _worst(errors["pivots"], pivot_error)
             conditioned_ok &= pivot_error <= tolerance  # the pivots before the zero one
             continue
         pivot_error = _relative(pivots, np.array(data.D))
-        errors["pivots"] = max(errors["pivots"], pivot_error)
+        errors["pivots"] = _worst(errors["pivots"], pivot_error)
         allowed = max(tolerance, float(kappa) * _EPS)
         conditioned_ok &= pivot_error <= allowed
         qdd_ref = np.array(pin.aba(model, data, q, v, tau))
         qdd = dm.forward_dynamics(q, v, tau)
         qdd_error = _relative(qdd, qdd_ref)
         conditioned_ok &= qdd_error <= allowed
-        errors["qdd"] = max(errors["qdd"], qdd_error)
+        errors["qdd"] = _worst(errors["qdd"], qdd_error)
         backward = np.linalg.norm(M_ref @ (qdd - qdd_ref)) / (
             eigenvalues[-1] * np.linalg.norm(qdd_ref)
         )
-        errors["backward"] = max(errors["backward"], float(backward))
+        errors["backward"] = _worst(errors["backward"], float(backward))
     notes = []
     if not use_denoc:
         notes.append("DeNOC reads URDF only: Pinocchio's M is compared with MuJoCo's")
@@ -248,6 +277,9 @@ def crosscheck_robot(
         errors["mujoco"] = None
     compared = [errors[k] for k in ("gim", "diag", "tau", "backward", "mujoco")]
     passed = conditioned_ok and all(e <= tolerance for e in compared if e is not None)
+    passed = passed and not any(
+        e is not None and np.isnan(e) for e in (*errors.values(), kappa_max)
+    )
     return CrossCheckResult(
         robot=robot.name,
         floating=robot.floating,

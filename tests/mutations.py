@@ -58,7 +58,7 @@ class Mutant:
 DENOC = ("tests/test_denoc.py",)
 LONG = ("tests/test_longchain.py",)
 STRESS_QUICK = ("tests/test_stress.py", "-m", "not slow")
-#: the compiled kernels behind analyze_linear and matrix_free_kappa (gimwatch/denoc/linear.py)
+#: the compiled kernels behind analyze_linear and extreme_eigenvalues (gimwatch/denoc/linear.py)
 COMPILED_STATE = ("tests/test_longchain.py", "-k", "compiled_state or closed_forms or lanczos")
 
 MUTANTS = (

@@ -143,7 +143,9 @@ def test_crosscheck_command_json_and_exit_codes(capsys):
     code, out, _ = run(capsys, "crosscheck", "ur5", "--samples", "2", "--tolerance", "1e-30")
     assert code == 1 and "ur5  FAIL" in out and "0/1 passed" in out
     code, _, err = run(capsys, "crosscheck", "ur5", "--tolerance", "-1")
-    assert code == 2 and err == "gimwatch: error: --tolerance must be a number > 0, got -1.0\n"
+    assert (
+        code == 2 and err == "gimwatch: error: --tolerance must be a number > 0 and < 1, got -1.0\n"
+    )
 
 
 def test_crosscheck_all_skips_what_cannot_load_with_the_reason(capsys, monkeypatch):

@@ -22,7 +22,7 @@ import gimwatch.bench
 import gimwatch.simulation.results_folder
 from gimwatch.bench import SectionResult, Table
 from gimwatch.cli import main
-from gimwatch.output import folders
+from gimwatch.output import folders, swap
 from gimwatch.simulation.simulate import Simulation
 
 SCENE = """robot = "chain:3"
@@ -119,7 +119,7 @@ def test_simulate_failing_to_write_keeps_the_previous_folder(previous, monkeypat
             return original(*args, **kwargs)
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(folders, "_exchange", lambda a, b: False)  # the two-rename fallback
+    monkeypatch.setattr(swap, "exchange", lambda a, b: False)  # the two-rename fallback
     monkeypatch.setattr(folders.os, call, broken)
     code = main(["simulate", str(scene), "-o", str(out)])
     err = capsys.readouterr().err
@@ -163,3 +163,57 @@ def test_bench_interrupted_in_a_section_keeps_the_finished_ones(tmp_path, monkey
     report = (out / "report.md").read_text()
     assert "the finished section" in report and "Estimator quality" not in report
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == [folders.MARKER]
+
+
+def test_demo_interrupted_keeps_the_finished_chains_and_says_so(tmp_path):
+    from gimwatch.demo import run_demo
+
+    def progress(n):
+        if n == 3:
+
+            def interrupt(fraction):
+                raise KeyboardInterrupt
+
+            return interrupt
+        return None
+
+    out = tmp_path / "demo"
+    report = run_demo(out, lengths=(2, 3, 4), duration_s=0.1, animate=None, progress=progress)
+    text = report.read_text()
+    assert "**Stopped early**: chain_3 ended as `interrupted` at t = 0 s" in text
+    assert json.loads((out / "chain_2" / "summary.json").read_text())["status"] == "completed"
+    assert json.loads((out / "chain_3" / "summary.json").read_text())["status"] == "interrupted"
+    assert not (out / "chain_4").exists() and (out / "fig2_chain_2.png").exists()
+    marker = json.loads((out / folders.MARKER).read_text())
+    assert {"chain_2", "chain_3", "report.md", "fig2_chain_2.png"} <= set(marker["files"])
+
+
+def test_bench_keeps_the_files_it_does_not_rewrite(tmp_path, monkeypatch, capsys):
+    """The folder's README and the tables of sections not run this time stay."""
+    out = tmp_path / "bench"
+    out.mkdir()
+    (out / "README.md").write_text("about these benchmarks")
+    (out / "other_section.csv").write_text("n\n1\n")
+    folders.write_marker(out, "bench", {"other_section.csv"})
+    table = Table("fake_timings", ("n", "seconds"))
+    table.add(n=4, seconds=1.5e-6)
+    result = SectionResult(name="conditioning", title="Conditioning cost vs n", tables=[table])
+
+    class FakeSection:
+        @staticmethod
+        def run(context):
+            assert context.output != out  # sections write into the staging folder
+            return result
+
+    monkeypatch.setattr(
+        gimwatch.bench.importlib,
+        "import_module",
+        {"gimwatch.bench.conditioning_cost": FakeSection}.__getitem__,
+    )
+    assert main(["bench", "conditioning", "--quick", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert (out / "README.md").read_text() == "about these benchmarks"
+    assert (out / "other_section.csv").read_text() == "n\n1\n"
+    marker = json.loads((out / folders.MARKER).read_text())
+    assert "README.md" not in marker["files"] and "other_section.csv" in marker["files"]
+    assert {"fake_timings.csv", "report.md", "summary.json"} <= set(marker["files"])

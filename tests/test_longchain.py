@@ -10,7 +10,7 @@ import pinocchio as pin
 import pytest
 from closed_forms import rod_chain_gim, straight_chain_extreme_eigenvalues
 
-from gimwatch.denoc import DenocModel, chain_body_tree, matrix_free_kappa, read_body_tree
+from gimwatch.denoc import DenocModel, chain_body_tree, extreme_eigenvalues, read_body_tree
 from gimwatch.errors import BackendWarning
 from gimwatch.metrics.linear_analysis import analyze_linear, chain_configurations
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
@@ -104,7 +104,7 @@ def test_matrix_free_kappa_matches_the_dense_eigensolver(n):
         chain_configurations(chain_spec(n), 1, seed=n)[0]
     )
     values = np.linalg.eigvalsh(state.dense())
-    found = matrix_free_kappa(state, seed=0)
+    found = extreme_eigenvalues(state, seed=0)
     assert found.kappa == pytest.approx(values[-1] / values[0], rel=1e-7)
     assert found.lambda_min == pytest.approx(values[0], rel=1e-7)
 
@@ -116,7 +116,7 @@ def test_matrix_free_kappa_matches_mpmath_at_50_digits():
         M = PlanarChainReference(spec).gim(q)
         values = sorted(mpmath.eigsy(M, eigvals_only=True))
         exact = float(values[-1] / values[0])
-    found = matrix_free_kappa(DenocModel.from_chain(spec).state(q), seed=3, rtol=1e-12)
+    found = extreme_eigenvalues(DenocModel.from_chain(spec).state(q), seed=3, rtol=1e-12)
     assert found.kappa == pytest.approx(exact, rel=1e-9)
 
 
@@ -151,7 +151,7 @@ def test_lanczos_kappa_of_the_clustered_straight_chain_is_tight(n, rel):
     # max_steps reached); a Lanczos stopped at rtol = 1e-3 is off by 4e-4 and 8e-4.
     lambda_min, lambda_max = straight_chain_extreme_eigenvalues(n)
     exact = lambda_max / lambda_min
-    found = matrix_free_kappa(DenocModel.from_chain(chain_spec(n)).state(np.zeros(n)))
+    found = extreme_eigenvalues(DenocModel.from_chain(chain_spec(n)).state(np.zeros(n)))
     assert found.kappa == pytest.approx(exact, rel=rel), (found.kappa, exact)
     assert found.lambda_min == pytest.approx(lambda_min, rel=rel)
     assert found.lambda_max == pytest.approx(lambda_max, rel=1e-12)
@@ -234,7 +234,7 @@ def test_simulate_backend_option_overrides_the_scene(tmp_path, capsys):
 
 
 def test_compiled_state_operators_match_the_closed_form():
-    # the compiled kernels behind analyze_linear and matrix_free_kappa, checked directly
+    # the compiled kernels behind analyze_linear and extreme_eigenvalues, checked directly
     # (δ alone cannot see a uniform error of the diagonal; κ alone hides a small one of M⁻¹)
     n = 9
     spec = chain_spec(n)

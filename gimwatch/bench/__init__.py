@@ -122,6 +122,11 @@ SECTIONS: dict[str, Section] = {
             "Cost of the watch per step",
             "gimwatch.bench.watch_section",
         ),
+        Section(
+            "watch_mujoco",
+            "Cost of the watch in a MuJoCo loop",
+            "gimwatch.bench.watch_mujoco",
+        ),
         Section("denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section"),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),
         Section("lean", "δ at the cost of its arithmetic", "gimwatch.bench.lean_cost"),

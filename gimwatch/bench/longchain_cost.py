@@ -28,7 +28,7 @@ import scipy.linalg
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
-from gimwatch.denoc import DenocModel, matrix_free_kappa
+from gimwatch.denoc import DenocModel, extreme_eigenvalues
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
 
@@ -111,7 +111,7 @@ def _kappa_table(context: BenchContext, sizes) -> Table:
         state = model.state(np.zeros(n))
         context.progress(f"  n = {n}: kappa, matrix-free and dense")
         start = time.perf_counter()
-        found = matrix_free_kappa(state, seed=context.seed)
+        found = extreme_eigenvalues(state, seed=context.seed)
         seconds = time.perf_counter() - start
         table.add(
             n=n,
@@ -120,7 +120,7 @@ def _kappa_table(context: BenchContext, sizes) -> Table:
             kappa_over_4n4=found.kappa / (4 * n**4),
             lambda_min=found.lambda_min,
             seconds=seconds,
-            products=found.operator_applications,
+            products=found.products,
         )
         start = time.perf_counter()
         values = scipy.linalg.eigvalsh(state.dense())

@@ -16,7 +16,7 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the previous
   eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
   means nothing (eps·κ ≈ 1e-3): the tracker is compared with cold-start Lanczos at 1e-10 on
-  DeNOC's operators (:func:`gimwatch.denoc.matrix_free_kappa`).
+  DeNOC's operators (:func:`gimwatch.denoc.extreme_eigenvalues`).
 * ``tracker_claim`` — along the paper's own trajectories (``scenes/chain_{4,10,20}.toml``): δ, αδ
   (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch metric: median cost
   of one :meth:`~gimwatch.metrics.watch.Watch.sample` and the median / max relative error
@@ -40,7 +40,7 @@ from threadpoolctl import threadpool_limits
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits
-from gimwatch.denoc import DenocModel, matrix_free_kappa
+from gimwatch.denoc import DenocModel, extreme_eigenvalues
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.metrics.tracker import KappaTracker
 from gimwatch.metrics.watch import Watch
@@ -175,10 +175,10 @@ def _tracker_rows(context: BenchContext, table: Table, n: int) -> None:
     rows = []
     if data is None:
         lanczos, lanczos_us = _per_sample(
-            lambda q: matrix_free_kappa(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]
+            lambda q: extreme_eigenvalues(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]
         )
         reference = np.array([r.kappa for r in lanczos])
-        cold_products = float(np.median([r.operator_applications for r in lanczos]))
+        cold_products = float(np.median([r.products for r in lanczos]))
         diff = float(np.max(np.abs(kappa[:3] - reference) / reference))
         rows.append(
             dict(

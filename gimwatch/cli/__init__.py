@@ -28,6 +28,7 @@ from gimwatch.suggest import did_you_mean
 __all__ = ["get_argument_parser", "main"]
 
 EXIT_OK, EXIT_CHECK_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_TERMINATED = 143  # SIGTERM: 128 + 15, as EXIT_INTERRUPTED is 128 + SIGINT
 
 
 class UsageError(GimwatchError):
@@ -194,15 +195,20 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 
 def _run(argv: Sequence[str] | None) -> int:
-    from threadpoolctl import threadpool_limits
+    # Importing a command's modules runs Python code called from C (Pinocchio's bindings,
+    # numba): a KeyboardInterrupt raised there leaves CPython believing it went unhandled
+    # (the process then kills itself with SIGINT on exit). Signals are noted, acted on after.
+    with LATCH.deferred("hard"):
+        from threadpoolctl import threadpool_limits
 
-    if os.environ.get("GIMWATCH_FAULT_PAUSE"):  # fault tests: pause at a phase, get a signal
-        from gimwatch.output import folders
+        if os.environ.get("GIMWATCH_FAULT_PAUSE"):  # fault tests: pause at a phase, get a signal
+            from gimwatch.output import folders
 
-        folders.phase_hook = fault_pause
-        fault_pause("import")
-    argv = sys.argv[1:] if argv is None else list(argv)
-    args = get_argument_parser(_command_in(argv) or "").parse_args(argv)
+            folders.phase_hook = fault_pause
+            fault_pause("import")
+        argv = sys.argv[1:] if argv is None else list(argv)
+        args = get_argument_parser(_command_in(argv) or "").parse_args(argv)
+    LATCH.check()
     # GIMs are small dense matrices: multi-threaded OpenBLAS makes their eigen-solves
     # 20-40x slower on 2 cores, so the command line keeps BLAS on one thread.
     with threadpool_limits(limits=1, user_api="blas"):

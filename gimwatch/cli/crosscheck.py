@@ -12,8 +12,13 @@ import sys
 
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
-from gimwatch.crosscheck import DEFAULT_TOLERANCE, CrossCheckResult, crosscheck_robot
-from gimwatch.errors import InputError, RobotError
+from gimwatch.crosscheck import (
+    DEFAULT_TOLERANCE,
+    CrossCheckResult,
+    check_tolerance,
+    crosscheck_robot,
+)
+from gimwatch.errors import RobotError
 from gimwatch.model.robots import example_robot_names, load_robot
 
 NAME = "crosscheck"
@@ -88,8 +93,7 @@ def _print(results: list[CrossCheckResult], args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Cross-check each robot and print the worst errors."""
-    if not args.tolerance > 0:
-        raise InputError("--tolerance", "a number > 0", args.tolerance)
+    check_tolerance(args.tolerance, "--tolerance")
     everything = "all" in args.robots
     specs = list(example_robot_names()) if everything else args.robots
     # Load every named robot first, so that bad input fails with one line before any work.

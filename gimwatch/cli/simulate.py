@@ -35,14 +35,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Validate, simulate, write; report the status on stderr and a summary on stdout."""
-    scene = load_scene(args.scene)
-    if args.backend is not None:
-        scene = dataclasses.replace(scene, backend=args.backend)
     output = Path(args.output) if args.output else Path("results") / Path(args.scene).stem
-    # compiled code runs from here on: a signal is noted and acted on between steps
+    # Pinocchio and compiled (numba) code run from here on: a signal is noted and acted on
+    # at safe points (here, and between integrator steps)
     with LATCH.deferred("hard"):
+        scene = load_scene(args.scene)
+        if args.backend is not None:
+            scene = dataclasses.replace(scene, backend=args.backend)
         simulation = Simulation(scene)  # every error that needs the robot is raised here
-        LATCH.check()
+    LATCH.check()
     with Reservation(output):  # refused (another writer, not ours) before the work
         with LATCH.deferred("hard"):
             bar = ProgressBar(f"{simulation.robot.name}")

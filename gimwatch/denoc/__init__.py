@@ -13,7 +13,7 @@ and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can che
   in Pinocchio's coordinate order (:mod:`.fused`); ``DenocModel.lean()`` builds it.
 * :class:`LinearTimeModel` — fixed-base trees, the same recursions compiled with numba
   (:mod:`.compiled`): O(n) time and memory, for chains of 10^4–10^5 links, with the
-  matrix-free condition number :func:`matrix_free_kappa`.
+  matrix-free condition number :func:`extreme_eigenvalues`.
 """
 
 from gimwatch.denoc.chain import chain_body_tree
@@ -22,7 +22,7 @@ from gimwatch.denoc.linear import (
     ConfigurationState,
     LinearTimeModel,
     MatrixFreeKappa,
-    matrix_free_kappa,
+    extreme_eigenvalues,
 )
 from gimwatch.denoc.model import DenocModel
 from gimwatch.denoc.tree import BodyTree, read_body_tree
@@ -35,6 +35,6 @@ __all__ = [
     "LinearTimeModel",
     "MatrixFreeKappa",
     "chain_body_tree",
-    "matrix_free_kappa",
+    "extreme_eigenvalues",
     "read_body_tree",
 ]

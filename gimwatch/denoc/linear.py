@@ -3,7 +3,7 @@
 :class:`LinearTimeModel` wraps a fixed-base :class:`~gimwatch.denoc.tree.BodyTree`;
 :meth:`LinearTimeModel.at` gives the :class:`ConfigurationState` at one configuration with
 diag M, M·x, M⁻¹·x, the UDUᵀ pivots, inverse and forward dynamics, each O(n) in time and
-memory. :func:`matrix_free_kappa` turns M·x and M⁻¹·x into κ₂ by Lanczos.
+memory. :func:`extreme_eigenvalues` turns M·x and M⁻¹·x into κ₂ by Lanczos.
 
 Coordinates are the tree's body order (parents first), one per body: an angle for revolute
 and continuous joints, a displacement for prismatic ones. Pinocchio's Data for an n-joint
@@ -12,7 +12,7 @@ model needs memory growing as n³, and the dense GIM n²; nothing here grows fas
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -23,7 +23,7 @@ from gimwatch.denoc import compiled
 from gimwatch.denoc.tree import BodyTree
 from gimwatch.errors import ConditioningError, InputError
 
-__all__ = ["ConfigurationState", "LinearTimeModel", "MatrixFreeKappa", "matrix_free_kappa"]
+__all__ = ["ConfigurationState", "LinearTimeModel", "MatrixFreeKappa", "extreme_eigenvalues"]
 
 _NO_GRAVITY = np.zeros(3)
 _PRISMATIC = 3
@@ -182,24 +182,31 @@ class ConfigurationState:
 class MatrixFreeKappa:
     """κ₂ of M(q) from Lanczos on x ↦ M x and x ↦ M⁻¹ x (M never formed).
 
-    Ritz values approach the extreme eigenvalues from inside the spectrum, so
-    ``lambda_max`` and ``1 / lambda_min`` are lower bounds and ``kappa`` a lower bound of κ₂
-    that converges to it.
+    The one record of every matrix-free κ in gimwatch: DeNOC's plain Lanczos
+    (:func:`extreme_eigenvalues`) and ARPACK on Pinocchio's RNEA/ABA
+    (:func:`gimwatch.metrics.matrix_free.kappa_matrix_free`). Ritz values approach the
+    extreme eigenvalues from inside the spectrum, so ``lambda_max`` and ``1 / lambda_min``
+    are lower bounds and ``kappa`` a lower bound of κ₂ that converges to it.
 
     Attributes:
         kappa: λmax / λmin.
         lambda_max: Largest eigenvalue of M.
         lambda_min: Smallest eigenvalue of M (1 / the largest of M⁻¹).
-        operator_applications: O(n) recursions applied (M·x and M⁻¹·x together).
+        products: O(n) products applied (M·x and M⁻¹·x together).
         last_relative_change: Relative change of the Ritz values over the last 10 steps
-            (below ``rtol`` when converged; larger when ``max_steps`` ran out).
+            (below ``rtol`` when converged; larger when ``max_steps`` ran out); NaN when
+            ARPACK, which checks its own residuals, found them.
+        vector_max: Eigenvector of λmax, to warm-start a nearby sample (None if not kept).
+        vector_min: Eigenvector of λmin (None if not kept).
     """
 
     kappa: float
     lambda_max: float
     lambda_min: float
-    operator_applications: int
-    last_relative_change: float
+    products: int
+    last_relative_change: float = float("nan")
+    vector_max: np.ndarray | None = field(default=None, repr=False)
+    vector_min: np.ndarray | None = field(default=None, repr=False)
 
 
 def _largest_ritz_value(apply, start: np.ndarray, *, rtol: float, max_steps: int):
@@ -246,7 +253,7 @@ def _largest_ritz_value(apply, start: np.ndarray, *, rtol: float, max_steps: int
     raise AssertionError("unreachable")  # the loop returns at its last step
 
 
-def matrix_free_kappa(
+def extreme_eigenvalues(
     state: ConfigurationState, *, seed: int = 0, rtol: float = 1e-10, max_steps: int = 3000
 ) -> MatrixFreeKappa:
     """κ₂ of M(q) from its extreme eigenvalues with O(n) operators only.
@@ -276,6 +283,6 @@ def matrix_free_kappa(
         kappa=float(lam_max * inv_min),
         lambda_max=float(lam_max),
         lambda_min=float(1.0 / inv_min),
-        operator_applications=steps_max + steps_min,
+        products=steps_max + steps_min,
         last_relative_change=max(change_max, change_min),
     )

@@ -10,6 +10,8 @@ walk from the root reaches them (children by joint name): a parent comes before 
 from __future__ import annotations
 
 import io
+import logging
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 import numpy as np
@@ -100,12 +102,21 @@ def _merge(bodies: list[tuple[float, np.ndarray, np.ndarray]]) -> tuple:
     return mass, com, inertia
 
 
-def _load_yourdfpy(xml: str, source: str):
+def _load_yourdfpy(root: ET.Element, source: str):
+    """The robot yourdfpy reads from the checked ``<robot>`` element, its chatter silenced.
+
+    It is given the element re-serialised as UTF-8 (no XML declaration naming another
+    encoding, no comments for lxml to find too big); its log records are dropped and its
+    errors re-worded with the file's name.
+    """
     import yourdfpy
 
+    text = ET.tostring(root, encoding="utf-8")
+    logger = logging.getLogger("yourdfpy")
+    disabled, logger.disabled = logger.disabled, True
     try:
         return yourdfpy.URDF.load(
-            io.BytesIO(xml.encode("utf-8")),
+            io.BytesIO(text),
             build_scene_graph=False,
             build_collision_scene_graph=False,
             load_meshes=False,
@@ -113,6 +124,8 @@ def _load_yourdfpy(xml: str, source: str):
         ).robot
     except Exception as exc:  # yourdfpy raises many types on bad input
         raise URDFError(source, f"yourdfpy cannot read it ({exc})") from exc
+    finally:
+        logger.disabled = disabled
 
 
 def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>") -> BodyTree:
@@ -122,8 +135,7 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
         URDFError: The links do not form a tree, a joint type is not revolute, continuous,
             prismatic or fixed, or a number DeNOC relies on is not finite (or an axis is 0).
     """
-    check_urdf(xml, source)
-    robot = _load_yourdfpy(xml, source)
+    robot = _load_yourdfpy(check_urdf(xml, source), source)
     children: dict[str, list] = {}
     for joint in robot.joints:
         if joint.type not in _SUPPORTED:

@@ -47,10 +47,10 @@ def check_gim(matrix: npt.ArrayLike) -> np.ndarray:
     """Return ``matrix`` as a float array after checking it is a valid GIM.
 
     Raises:
-        ConditioningError: Not square, empty, not finite, not symmetric (beyond
-            ``SYMMETRY_RTOL``) or not positive definite.
+        ConditioningError: Not real numbers, not square, empty, not finite, not symmetric
+            (beyond ``SYMMETRY_RTOL``) or not positive definite.
     """
-    M = np.asarray(matrix, dtype=float)
+    M = _real_array(matrix, "the GIM")
     if M.ndim != 2 or M.shape[0] != M.shape[1] or M.shape[0] == 0:
         raise ConditioningError(f"the GIM must be a non-empty square matrix, got shape {M.shape}")
     if not np.all(np.isfinite(M)):
@@ -108,8 +108,28 @@ def condition_number(matrix: npt.ArrayLike) -> float:
     return float(values[-1] / values[0])
 
 
+def _real_array(value: npt.ArrayLike, what: str) -> np.ndarray:
+    """``value`` as a float array; complex or non-numeric entries are a ConditioningError.
+
+    A complex Hermitian matrix is not a GIM: casting it to float would drop its imaginary
+    part (and NumPy only warns), giving a wrong κ.
+    """
+    try:
+        array = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nested lists
+        raise ConditioningError(f"{what} must be an array of real numbers ({exc})") from exc
+    if array.dtype.kind == "O":  # Python numbers (Fraction, mpmath.mpf, ...)
+        try:
+            return array.astype(float)
+        except (TypeError, ValueError) as exc:
+            raise ConditioningError(f"{what} must hold real numbers ({exc})") from exc
+    if array.dtype.kind not in "biuf":
+        raise ConditioningError(f"{what} must hold real numbers, got {array.dtype.name} entries")
+    return array.astype(float)
+
+
 def _diagonal_of(matrix_or_diagonal: npt.ArrayLike) -> np.ndarray:
-    array = np.asarray(matrix_or_diagonal, dtype=float)
+    array = _real_array(matrix_or_diagonal, "the GIM or its diagonal")
     diag = np.diag(array) if array.ndim == 2 else array
     if diag.ndim != 1 or diag.size == 0:
         raise ConditioningError(f"expected a GIM or its diagonal, got shape {array.shape}")

@@ -15,7 +15,7 @@ from collections.abc import Collection
 import numpy as np
 import numpy.typing as npt
 
-from gimwatch.denoc import DenocModel, matrix_free_kappa
+from gimwatch.denoc import DenocModel, extreme_eigenvalues
 from gimwatch.errors import InputError
 from gimwatch.metrics.dense_analysis import GimAnalysis, check_massless
 from gimwatch.model.chains import ChainSpec
@@ -75,7 +75,7 @@ def analyze_linear(
     check_massless(diag, model.joint_names, name=name, source=model.tree.source)
     kappa = lambda_min = lambda_max = backward = None
     if "kappa" in metrics:
-        found = matrix_free_kappa(state, seed=seed, rtol=rtol)
+        found = extreme_eigenvalues(state, seed=seed, rtol=rtol)
         kappa, lambda_min, lambda_max = found.kappa, found.lambda_min, found.lambda_max
     if "pivot_ratio_backward" in metrics:
         pivots = state.pivots()

@@ -17,18 +17,16 @@ eigenvectors as ``start`` warm-starts a sweep.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
+from gimwatch.denoc.linear import MatrixFreeKappa
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = [
-    "MatrixFreeKappa",
     "gim_inverse_operator",
     "gim_operator",
     "kappa_matrix_free",
@@ -85,27 +83,6 @@ def gim_inverse_operator(
         data: A Pinocchio Data to reuse (one is made when omitted).
     """
     return _operator(robot, q, data, "Minv")
-
-
-@dataclass(frozen=True)
-class MatrixFreeKappa:
-    """κ₂ from the extreme eigenvalues found by Lanczos on the RNEA and ABA operators.
-
-    Attributes:
-        kappa: λmax / λmin.
-        lambda_max: Largest eigenvalue of M (SI units).
-        lambda_min: Smallest eigenvalue of M.
-        products: Number of RNEA plus ABA evaluations spent.
-        vector_max: Eigenvector of λmax (to warm-start the next sample).
-        vector_min: Eigenvector of λmin.
-    """
-
-    kappa: float
-    lambda_max: float
-    lambda_min: float
-    products: int
-    vector_max: np.ndarray = field(repr=False)
-    vector_min: np.ndarray = field(repr=False)
 
 
 def _largest(operator: LinearOperator, v0: np.ndarray, tol: float) -> tuple[float, np.ndarray]:

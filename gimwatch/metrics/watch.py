@@ -14,17 +14,38 @@ at most once and only when a watched metric needs them:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
 from typing import ClassVar
 
 import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
 
+from gimwatch.errors import InputError
 from gimwatch.metrics import conditioning
+from gimwatch.metrics.alarm import (
+    DEFAULT_ALARM_THRESHOLD,
+    Alarm,
+    alarm_threshold,
+    check_on_alarm,
+    warn_alarm,
+)
+from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.matrix_free import kappa_matrix_free
+from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
 from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.robots import Robot
+from gimwatch.model.robots import Robot, as_configuration
 
-__all__ = ["METRICS", "Alarm", "EstimatorQuality", "Watch", "estimator_quality"]
+__all__ = [
+    "DEFAULT_ALARM_THRESHOLD",
+    "DEFAULT_METRICS",
+    "METRICS",
+    "OPERATOR_METRICS",
+    "Alarm",
+    "EstimatorQuality",
+    "Watch",
+    "estimator_quality",
+]
 
 
 class _GimState:
@@ -252,79 +273,286 @@ METRICS: dict[str, type[Metric]] = {
 }
 
 
-@dataclass(frozen=True)
-class Alarm:
-    """The alarm metric crossed its threshold at ``time_s`` (upward crossing)."""
+#: Watched when a constructor is given no metric names: κ (Eq. 6) and δ (Sec. 4).
+DEFAULT_METRICS = ("kappa", "diagonal_ratio")
+#: Metrics that run the robot's RNEA/ABA at q: they need a robot and a configuration, not M.
+OPERATOR_METRICS = frozenset({"kappa_lanczos", "kappa_tracked"})
 
-    time_s: float
-    metric: str
-    value: float
-    threshold: float
+
+def _metric_names(metrics) -> tuple[str, ...]:
+    names = (metrics,) if isinstance(metrics, str) else tuple(metrics)
+    for name in names:
+        if name not in METRICS:
+            raise InputError("a watched metric", f"one of {sorted(METRICS)}", name)
+    return names
 
 
 class Watch:
-    """Evaluates the requested metrics at samples and raises alarms.
+    """Evaluates the requested metrics at samples and raises alarms, in any loop.
+
+    Build it from what the loop has: ``Watch(robot, metrics)`` (a gimwatch
+    :class:`~gimwatch.model.robots.Robot`), :meth:`from_model` (a ``pinocchio.Model``),
+    :meth:`from_mujoco` (a MuJoCo ``MjModel``/``MjData`` pair) or :meth:`from_matrices` (M
+    or diag M fed by hand). Sample with :meth:`sample` (a configuration ``q``),
+    :meth:`sample_matrix` (M) or :meth:`sample_diagonal` (diag M); read the series with
+    :meth:`array`, :meth:`arrays` or :meth:`to_dataframe`.
 
     Args:
-        robot: The robot.
+        robot: The robot; None when ``dynamics`` is a source that gives ``nv`` (MuJoCo, matrices).
         metrics: Names from :data:`METRICS`; only these are built and evaluated.
         alarm_metric: One of ``metrics`` (or None for no alarm).
-        alarm_threshold: Threshold on the metric's condition-number scale.
+        alarm_threshold: Threshold on the metric's condition-number scale; default
+            :data:`DEFAULT_ALARM_THRESHOLD` (κ·eps = 1e-2).
+        on_alarm: Called with the :class:`Alarm` at each upward crossing.
+        warn: Issue :class:`~gimwatch.errors.IllConditionedWarning` at each upward crossing;
+            None: when no ``on_alarm`` is given.
         dynamics: Where M(q) and diag M(q) come from: an object with ``gim(q)`` and
             ``gim_diagonal(q)`` (a simulation passes its backend, so that a long chain on
-            ``denoc`` never builds a Pinocchio Data); None: Pinocchio, with a Data of its own.
+            ``denoc`` never builds a Pinocchio Data; see :mod:`gimwatch.metrics.watch_sources`);
+            None: Pinocchio, with a Data of its own.
+
+    Raises:
+        InputError: An unknown metric, a wrong type, an alarm on an unwatched metric.
     """
 
     def __init__(
         self,
-        robot: Robot,
+        robot: Robot | None = None,
         metrics: tuple[str, ...] = (),
         *,
         alarm_metric: str | None = None,
         alarm_threshold: float | None = None,
+        on_alarm: Callable[[Alarm], object] | None = None,
+        warn: bool | None = None,
         dynamics=None,
     ) -> None:
-        self.robot = robot
-        self.dynamics = dynamics
-        self.metrics = {name: METRICS[name]() for name in metrics}
+        names = _metric_names(metrics)
+        if robot is None:
+            if dynamics is None or not hasattr(dynamics, "nv"):
+                raise InputError("robot", "a gimwatch Robot (or a source giving nv)", None)
+            for name in OPERATOR_METRICS.intersection(names):
+                raise InputError(
+                    f"metric {name!r}",
+                    "watched on a robot (it runs RNEA/ABA at q)",
+                    "a watch without one",
+                    hint="use Watch(robot, ...) or Watch.from_model",
+                )
+        elif not isinstance(robot, Robot):
+            raise InputError(
+                "robot",
+                "a gimwatch Robot",
+                type_name(robot),
+                hint="Watch.from_model takes a pinocchio.Model, Watch.from_mujoco a MuJoCo pair",
+            )
+        self.robot, self.dynamics = robot, dynamics
+        self.nv = robot.nv if robot is not None else int(dynamics.nv)
+        self.dof_names = robot.dof_names if robot is not None else tuple(dynamics.dof_names)
+        self.metrics = {name: METRICS[name]() for name in names}
         self.full = any(m.full for m in self.metrics.values())
-        self.data = robot.new_data() if self.metrics and dynamics is None else None
+        self.data = robot.new_data() if self.metrics and dynamics is None and robot else None
         # diag M by one compiled DeNOC call (preallocated buffers) when M itself is not needed
+        # (a source's own diag M and δ when it has them: MuJoCo's sparse M, a held matrix)
         self.lean = None
-        if self.metrics and not self.full:
+        readable = robot is not None and (robot.urdf_xml or robot.chain is not None)
+        if not self.metrics or self.full:
+            pass
+        elif robot is None:
+            self.lean = dynamics if hasattr(dynamics, "diagonal_ratio") else None
+        elif readable or getattr(dynamics, "lean", None) is not None:
             from gimwatch.metrics.tracker_providers import lean_model
 
             self.lean = lean_model(robot, dynamics)
-        self.alarm_metric, self.alarm_threshold = alarm_metric, alarm_threshold
+        self._set_alarm(alarm_metric, alarm_threshold, on_alarm, warn)
+        self._check_q = robot is not None and dynamics is None
+        self._given = None
         self.times: list[float] = []
         self.series: dict[str, list] = {name: [] for name in self.metrics}
         self.alarms: list[Alarm] = []
         self._alarm_on = False
 
-    def sample(self, t: float, q: np.ndarray) -> Alarm | None:
-        """Record the watched metrics at time ``t`` (s); return a new alarm, if one is raised."""
+    def _set_alarm(self, metric, threshold, on_alarm, warn) -> None:
+        if metric is not None and (metric not in self.metrics or self.metrics[metric].vector):
+            scalars = [n for n, m in self.metrics.items() if not m.vector]
+            raise InputError("alarm_metric", f"one of the watched scalar metrics {scalars}", metric)
+        check_on_alarm(on_alarm)
+        self.alarm_metric, self.alarm_threshold = metric, alarm_threshold(threshold)
+        self.on_alarm = on_alarm
+        self.warn = on_alarm is None if warn is None else bool(warn)
+
+    # -- constructors ----------------------------------------------------------------------
+    @classmethod
+    def from_model(
+        cls,
+        model: pin.Model,
+        metrics: tuple[str, ...] = DEFAULT_METRICS,
+        *,
+        alarm_metric: str | None = None,
+        alarm_threshold: float | None = None,
+        on_alarm: Callable[[Alarm], object] | None = None,
+        warn: bool | None = None,
+    ) -> Watch:
+        """A watch on a ``pinocchio.Model`` (M from Pinocchio's CRBA; δ without forming M).
+
+        Sample with :meth:`sample` (``q`` of length ``model.nq``). Other arguments as in
+        :class:`Watch`.
+        """
+        return cls(
+            robot_from_model(model),
+            metrics,
+            alarm_metric=alarm_metric,
+            alarm_threshold=alarm_threshold,
+            on_alarm=on_alarm,
+            warn=warn,
+        )
+
+    @classmethod
+    def from_mujoco(
+        cls,
+        model,
+        data,
+        metrics: tuple[str, ...] = DEFAULT_METRICS,
+        *,
+        robot: Robot | pin.Model | None = None,
+        armature: bool = True,
+        alarm_metric: str | None = None,
+        alarm_threshold: float | None = None,
+        on_alarm: Callable[[Alarm], object] | None = None,
+        warn: bool | None = None,
+    ) -> Watch:
+        """A watch on a MuJoCo ``MjModel``/``MjData`` pair (M from ``mujoco.mj_fullM``).
+
+        ``sample(t)`` reads the M that MuJoCo holds in ``data`` (after ``mj_step``: M where
+        the step started); ``sample(t, qpos)`` computes M at ``qpos`` without touching
+        ``data``. ``robot`` (a gimwatch Robot or ``pinocchio.Model``) maps MuJoCo's joints by
+        name into its coordinates; ``armature=False`` removes MuJoCo's ``dof_armature`` from
+        the diagonal. See :class:`~gimwatch.metrics.watch_sources.MujocoSource`.
+        """
+        source = MujocoSource(model, data, robot=robot, armature=armature)
+        return cls(
+            None,
+            metrics,
+            alarm_metric=alarm_metric,
+            alarm_threshold=alarm_threshold,
+            on_alarm=on_alarm,
+            warn=warn,
+            dynamics=source,
+        )
+
+    @classmethod
+    def from_matrices(
+        cls,
+        nv: int,
+        metrics: tuple[str, ...] = DEFAULT_METRICS,
+        *,
+        dof_names: tuple[str, ...] | None = None,
+        alarm_metric: str | None = None,
+        alarm_threshold: float | None = None,
+        on_alarm: Callable[[Alarm], object] | None = None,
+        warn: bool | None = None,
+    ) -> Watch:
+        """A watch fed by hand: :meth:`sample_matrix` (M) or :meth:`sample_diagonal` (diag M)."""
+        return cls(
+            None,
+            metrics,
+            alarm_metric=alarm_metric,
+            alarm_threshold=alarm_threshold,
+            on_alarm=on_alarm,
+            warn=warn,
+            dynamics=GivenMatrix(nv, dof_names),
+        )
+
+    # -- sampling --------------------------------------------------------------------------
+    def sample(self, t: float, q: npt.ArrayLike | None = None) -> Alarm | None:
+        """Record the watched metrics of M(q) at time ``t`` (s); return a new alarm, if any.
+
+        ``q`` is the configuration (length nq; MuJoCo's ``qpos`` for :meth:`from_mujoco`,
+        where it may be omitted to read the M held in ``data``).
+        """
         if not self.metrics:
             return None
+        if isinstance(self.dynamics, GivenMatrix):
+            raise InputError(
+                "sample(t, q)",
+                "used on a watch of a robot or a MuJoCo pair",
+                "a matrix watch",
+                hint="use sample_matrix(t, M) or sample_diagonal(t, d)",
+            )
+        if q is None and not getattr(self.dynamics, "reads_state", False):
+            raise InputError("q", "given (a configuration of the robot)", None)
+        if self._check_q:
+            q = as_configuration(self.robot, q)
         state = _GimState(self.robot, self.data, q, self.full, self.dynamics, self.lean)
-        self.times.append(float(t))
+        return self._record(t, state)
+
+    def sample_matrix(self, t: float, M: npt.ArrayLike) -> Alarm | None:
+        """Record the watched metrics of the given M (nv x nv, symmetric positive definite)."""
+        given = self._hold()
+        given.hold_matrix(M)
+        return self._record(t, _GimState(self.robot, None, None, self.full, given, None))
+
+    def sample_diagonal(self, t: float, diagonal: npt.ArrayLike) -> Alarm | None:
+        """Record the watched metrics of the given diag M (only metrics that need no more)."""
         for name, metric in self.metrics.items():
-            self.series[name].append(metric(state))
+            if metric.full:
+                raise InputError(
+                    "sample_diagonal", "used when no watched metric needs the full M", name
+                )
+        given = self._hold()
+        given.hold_diagonal(diagonal)
+        return self._record(t, _GimState(self.robot, None, None, False, given, given))
+
+    def _hold(self) -> GivenMatrix:
+        for name in OPERATOR_METRICS.intersection(self.metrics):
+            raise InputError(
+                f"metric {name!r}", "sampled with q (it runs RNEA/ABA at q)", "a matrix sample"
+            )
+        if self._given is None:
+            self._given = self.dynamics if isinstance(self.dynamics, GivenMatrix) else None
+            self._given = self._given or GivenMatrix(self.nv, self.dof_names)
+        return self._given
+
+    def _record(self, t: float, state) -> Alarm | None:
+        try:
+            t = float(t)
+        except (TypeError, ValueError):
+            raise InputError("t", "a time in seconds", t) from None
+        if not math.isfinite(t):
+            raise InputError("t", "a finite time in seconds", t)
+        values = [metric(state) for metric in self.metrics.values()]  # all, then record
+        self.times.append(t)
+        for series, value in zip(self.series.values(), values, strict=True):
+            series.append(value)
         if self.alarm_metric is None:
             return None
         value = self.series[self.alarm_metric][-1]
         above = self.metrics[self.alarm_metric].severity(value) > self.alarm_threshold
         alarm = None
         if above and not self._alarm_on:
-            alarm = Alarm(float(t), self.alarm_metric, float(value), float(self.alarm_threshold))
+            alarm = Alarm(float(t), self.alarm_metric, float(value), self.alarm_threshold)
             self.alarms.append(alarm)
         self._alarm_on = above
+        if alarm is not None:
+            if self.warn:
+                warn_alarm(alarm, stacklevel=3)
+            if self.on_alarm is not None:
+                self.on_alarm(alarm)
         return alarm
 
+    # -- results ---------------------------------------------------------------------------
     @property
     def alpha(self) -> float | None:
         """α of the scaled diagonal ratio, when watched and calibrated."""
         metric = self.metrics.get("scaled_diagonal_ratio")
         return None if metric is None else metric.estimator.alpha
+
+    def array(self, name: str) -> np.ndarray:
+        """One series as an array: ``"t"`` (s) or a watched metric (vector metrics: 2-D)."""
+        if name == "t":
+            return np.asarray(self.times, dtype=float)
+        if name not in self.series:
+            watched = list(self.series)
+            raise InputError("the series name", f"'t' or a watched metric {watched}", name)
+        return np.asarray(self.series[name], dtype=float)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The series as arrays, keyed ``watch_<metric>`` plus ``watch_t``."""
@@ -333,52 +561,12 @@ class Watch:
             out[f"watch_{name}"] = np.asarray(values, dtype=float)
         return out
 
+    def to_dataframe(self):
+        """The series as a pandas DataFrame: ``t`` and one column per scalar metric.
 
-@dataclass(frozen=True)
-class EstimatorQuality:
-    """How well δ tracks κ along a run (α from t0 only, never tuned).
+        Vector metrics (``eigenvalues``, ``diagonal``) are spread into ``<metric>:<k>``.
+        Needs pandas (``pip install 'gimwatch[pandas]'``).
+        """
+        from gimwatch.output.dataframe import watch_frame
 
-    Attributes:
-        samples: Number of samples compared.
-        alpha: α = κ(t0)/δ(t0) (Eq. 15).
-        pearson_log: Pearson correlation of log δ vs log κ.
-        spearman: Spearman rank correlation of δ vs κ.
-        median_relative_error: median |αδ - κ| / κ.
-        max_relative_error: max |αδ - κ| / κ.
-        max_kappa: Largest κ seen.
-        max_scaled_diagonal_ratio: Largest αδ seen.
-    """
-
-    samples: int
-    alpha: float
-    pearson_log: float
-    spearman: float
-    median_relative_error: float
-    max_relative_error: float
-    max_kappa: float
-    max_scaled_diagonal_ratio: float
-
-
-def estimator_quality(kappa: np.ndarray, delta: np.ndarray) -> EstimatorQuality | None:
-    """Compare δ (and αδ, α = κ₀/δ₀) with κ along a series; None with fewer than 3 samples."""
-    from scipy import stats
-
-    kappa, delta = np.asarray(kappa, dtype=float), np.asarray(delta, dtype=float)
-    if kappa.size < 3:
-        return None
-    alpha = kappa[0] / delta[0]
-    scaled = alpha * delta
-    error = np.abs(scaled - kappa) / kappa
-    constant = np.ptp(np.log(delta)) == 0 or np.ptp(np.log(kappa)) == 0
-    pearson = math.nan if constant else float(stats.pearsonr(np.log(delta), np.log(kappa))[0])
-    spearman = math.nan if constant else float(stats.spearmanr(delta, kappa)[0])
-    return EstimatorQuality(
-        samples=int(kappa.size),
-        alpha=float(alpha),
-        pearson_log=pearson,
-        spearman=spearman,
-        median_relative_error=float(np.median(error)),
-        max_relative_error=float(np.max(error)),
-        max_kappa=float(np.max(kappa)),
-        max_scaled_diagonal_ratio=float(np.max(scaled)),
-    )
+        return watch_frame(self.arrays())

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import difflib
+import errno
 import os
 import re
 import sys
@@ -180,7 +181,7 @@ def _read_urdf(path: Path) -> str:
     """Read a URDF file; FIFOs and devices are refused (they could block or never end)."""
     try:
         if not path.exists():
-            raise URDFError(str(path), "no such file")
+            raise URDFError(str(path), path_problem(path))
         if path.is_dir():
             raise URDFError(str(path), "is a directory, not a URDF file")
         if not path.is_file():
@@ -193,6 +194,16 @@ def _read_urdf(path: Path) -> str:
         raise URDFError(str(path), f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
     except OSError as exc:
         raise URDFError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
+
+
+def path_problem(path: Path) -> str:
+    """Why a path that does not exist cannot be opened: a symbolic-link loop, or no file."""
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link loop (too many levels of symbolic links)"
+    return "no such file"
 
 
 @contextlib.contextmanager
@@ -524,11 +535,38 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     return qs
 
 
+#: |‖block‖ − 1| allowed for the unit blocks of a q given to the library functions.
+UNIT_NORM_TOLERANCE = 1e-6
+
+
 def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
-    """Check that ``q`` is a finite vector of length nq and return it as an array."""
-    array = np.asarray(q, dtype=float)
+    """Check that ``q`` is a finite real vector of length nq and return it as an array.
+
+    Each unit block (a continuous joint's (cos θ, sin θ), a quaternion) must have norm 1
+    within :data:`UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
+    the joint (a zero rotation matrix) and giving a wrong M(q).
+    """
+    try:
+        array = np.asarray(q)
+        if array.dtype.kind not in "biuf":
+            raise TypeError(f"{array.dtype.name} entries")
+        array = array.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise InputError("q", "a vector of real numbers", str(exc)) from None
     if array.shape != (robot.nq,):
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
     if not np.all(np.isfinite(array)):
         raise InputError("q", "finite", array.tolist())
+    for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
+        unit = _unit_block_size(joint)
+        if unit:
+            stop = joint.idx_q + joint.nq
+            norm = float(np.linalg.norm(array[stop - unit : stop]))
+            if not abs(norm - 1.0) <= UNIT_NORM_TOLERANCE:
+                what = "quaternion" if unit == 4 else "(cos θ, sin θ)"
+                raise InputError(
+                    f"the {what} of joint {name!r} in q",
+                    f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
+                    round(norm, 9),
+                )
     return array

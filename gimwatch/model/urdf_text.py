@@ -7,27 +7,73 @@ name the file and the element. It imports no dynamics library, so DeNOC can use 
 
 from __future__ import annotations
 
+import os
+import re
 import warnings
 import xml.etree.ElementTree as ET
 
 from gimwatch.errors import URDFError, URDFWarning
 from gimwatch.model.urdf_values import check_joint_values, check_link_values
 
-__all__ = ["check_urdf", "parse_urdf_xml"]
+__all__ = ["DEFAULT_MAX_LINKS", "MAX_TAG_CHARS", "check_urdf", "max_links", "parse_urdf_xml"]
 
 #: Document-type declarations can define entities (external files, "billion laughs");
 #: no URDF needs them, so they are refused before any parser sees the text.
 _FORBIDDEN = ("<!DOCTYPE", "<!ENTITY")
+_COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
+#: The most <link> (and <joint>) elements read by default; ``$GIMWATCH_MAX_LINKS`` overrides
+#: it. Counted in the text before any parser runs: a 20,000-link URDF would otherwise take
+#: minutes and gigabytes of Pinocchio's and yourdfpy's time before any other limit applies.
+DEFAULT_MAX_LINKS = 5000
+MAX_LINKS_VARIABLE = "GIMWATCH_MAX_LINKS"
+#: The longest tag (``<`` to ``>``, attributes included) read: expat slows down
+#: quadratically, without answering Ctrl-C, on tags with 100,000 attributes.
+MAX_TAG_CHARS = 65_536
+_LONG_TAG = re.compile(f"<[^<>]{{{MAX_TAG_CHARS}}}")
+
+
+def max_links() -> int:
+    """The link budget: ``$GIMWATCH_MAX_LINKS`` when set (a positive integer), else 5000."""
+    text = os.environ.get(MAX_LINKS_VARIABLE, "").strip()
+    if not text:
+        return DEFAULT_MAX_LINKS
+    if not text.isdigit() or int(text) < 1:
+        raise URDFError(f"${MAX_LINKS_VARIABLE}", f"must be a positive integer, got {text!r}")
+    return int(text)
+
+
+def _check_budget(xml: str, source: str) -> None:
+    """Refuse, before parsing, texts with more links or joints, or longer tags, than read."""
+    limit = max_links()
+    for tag in ("link", "joint"):
+        count = sum(1 for _ in re.finditer(rf"<{tag}[\s/>]", xml))
+        if count > limit:
+            raise URDFError(
+                source,
+                f"has {count} <{tag}> elements, more than the {limit} gimwatch reads "
+                f"(set ${MAX_LINKS_VARIABLE} to read more)",
+            )
+    if _LONG_TAG.search(xml):
+        raise URDFError(
+            source,
+            f"has a tag longer than {MAX_TAG_CHARS} characters (too many or too long attributes)",
+        )
 
 
 def parse_urdf_xml(xml: str, source: str) -> ET.Element:
-    """Parse URDF text safely and return its ``<robot>`` element."""
+    """Parse URDF text safely and return its ``<robot>`` element.
+
+    Comments are set aside first: a comment may mention ``<!DOCTYPE`` or be megabytes long
+    without counting against the file.
+    """
     if not xml.strip():
         raise URDFError(source, "the file is empty")
-    head = xml.upper()
+    text = _COMMENT.sub("", xml)
+    head = text.upper()
     for token in _FORBIDDEN:
         if token in head:
             raise URDFError(source, f"{token.lstrip('<!')} declarations are not allowed in a URDF")
+    _check_budget(text, source)
     try:
         root = ET.fromstring(xml)
     except ET.ParseError as exc:
@@ -105,6 +151,7 @@ def check_urdf(xml: str, source: str) -> ET.Element:
     ]
     for joint in root.findall("joint"):
         check_joint_values(joint, source)
+    _check_mimics(root, source)
     if doubtful:
         shown = ", ".join(doubtful[:4]) + (", ..." if len(doubtful) > 4 else "")
         warnings.warn(
@@ -116,6 +163,54 @@ def check_urdf(xml: str, source: str) -> ET.Element:
             stacklevel=2,
         )
     return root
+
+
+def _check_mimics(root: ET.Element, source: str) -> None:
+    """A mimic joint follows another moving joint, not itself, and not in a cycle.
+
+    A mimic naming a joint the file does not have is a :class:`URDFWarning` (real robots
+    ship such files when a hand is cut from its arm); Pinocchio then moves the joint freely.
+    """
+    kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
+    follows: dict[str, str] = {}
+    ghosts = []
+    for joint in root.findall("joint"):
+        mimic = joint.find("mimic")
+        if mimic is None:
+            continue
+        name, target = joint.get("name"), mimic.get("joint")
+        where = f"joint {name!r}"
+        if target == name:
+            raise URDFError(source, "<mimic> names the joint itself", element=where)
+        if target not in kinds:
+            ghosts.append(f"{name} -> {target}")
+            continue
+        if kinds[target] == "fixed":
+            raise URDFError(
+                source,
+                f"<mimic> names the fixed joint {target!r}, which never moves",
+                element=where,
+            )
+        follows[name] = target
+    for start in follows:
+        path, joint = [start], follows[start]
+        while joint in follows and joint not in path:
+            path.append(joint)
+            joint = follows[joint]
+        if joint == start:
+            cycle = " -> ".join([*path, start])
+            raise URDFError(
+                source, f"<mimic> joints form a cycle ({cycle})", element=f"joint {start!r}"
+            )
+    if ghosts:
+        shown = ", ".join(ghosts[:4]) + (", ..." if len(ghosts) > 4 else "")
+        warnings.warn(
+            URDFWarning(
+                f"{source}: {len(ghosts)} <mimic> joint(s) name a joint the file does not have "
+                f"({shown}); they are modelled as independent joints"
+            ),
+            stacklevel=3,
+        )
 
 
 def _reachable(root: str, children: dict[str, list[str]]) -> set[str]:

@@ -33,6 +33,7 @@ from gimwatch.errors import URDFError
 __all__ = [
     "INERTIA_ATOL_KG_M2",
     "INERTIA_RTOL",
+    "MAX_MAGNITUDE",
     "SUPPORTED_JOINT_TYPES",
     "check_joint_values",
     "check_link_values",
@@ -49,12 +50,27 @@ _LIMITED = ("revolute", "prismatic")
 #: taken as round-off; TIAGo's antennas reach -3.5e-8 kg m^2.
 INERTIA_ATOL_KG_M2 = 1e-6
 INERTIA_RTOL = 1e-6
+#: The largest magnitude of a length, angle, mass, inertia or damping in a URDF. A GIM entry
+#: is about mass x length^2, so values beyond it overflow to inf or NaN in the dynamics;
+#: no real robot comes near (joint limits, often 1e16 placeholders for "none", are exempt).
+MAX_MAGNITUDE = 1e15
+#: A joint axis is normalised by its length; components of magnitude outside this range
+#: make that length overflow (1e200) or underflow (1e-300) in double precision.
+AXIS_RANGE = (1e-100, 1e100)
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf|infinity)", re.I)
 _GEOMETRY = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",)}
 
 
-def _floats(text: str | None, count: int, *, what: str, source: str, where: str) -> list[float]:
-    """Parse ``count`` finite numbers separated by spaces, as urdfdom reads a value."""
+def _floats(
+    text: str | None,
+    count: int,
+    *,
+    what: str,
+    source: str,
+    where: str,
+    bound: float = MAX_MAGNITUDE,
+) -> list[float]:
+    """Parse ``count`` finite numbers of magnitude <= ``bound``, as urdfdom reads a value."""
     parts = (text or "").split()
     if len(parts) != count or not all(_NUMBER.fullmatch(p) for p in parts):
         rule = "a number" if count == 1 else f"{count} numbers separated by spaces"
@@ -62,11 +78,19 @@ def _floats(text: str | None, count: int, *, what: str, source: str, where: str)
     values = [float(p) for p in parts]
     if not all(math.isfinite(v) for v in values):
         raise URDFError(source, f"{what} must be finite, got {text!r}", element=where)
+    if any(abs(v) > bound for v in values):
+        raise URDFError(source, f"{what} must be within ±{bound:g}, got {text!r}", element=where)
     return values
 
 
 def _number(
-    element: ET.Element, attribute: str, *, source: str, where: str, default: float | None = None
+    element: ET.Element,
+    attribute: str,
+    *,
+    source: str,
+    where: str,
+    default: float | None = None,
+    bound: float = MAX_MAGNITUDE,
 ) -> float:
     text = element.get(attribute)
     what = f"<{element.tag} {attribute}>"
@@ -74,7 +98,7 @@ def _number(
         if default is None:
             raise URDFError(source, f"{what} is missing", element=where)
         return default
-    return _floats(text, 1, what=what, source=source, where=where)[0]
+    return _floats(text, 1, what=what, source=source, where=where, bound=bound)[0]
 
 
 def _check_origin(parent: ET.Element, *, source: str, where: str) -> None:
@@ -193,10 +217,7 @@ def check_joint_values(joint: ET.Element, source: str) -> None:
     _check_origin(joint, source=source, where=where)
     axis = joint.find("axis")
     if kind != "fixed" and axis is not None:
-        vector = _floats(axis.get("xyz", "1 0 0"), 3, what="<axis xyz>", source=source, where=where)
-        if not any(vector):
-            problem = f"<axis xyz> must be a non-zero vector, got {axis.get('xyz')!r}"
-            raise URDFError(source, problem, element=where)
+        _check_axis(axis.get("xyz", "1 0 0"), source=source, where=where)
     _check_limit(joint, kind, source=source, where=where)
     dynamics = joint.find("dynamics")
     if dynamics is not None:
@@ -212,6 +233,30 @@ def check_joint_values(joint: ET.Element, source: str) -> None:
             _number(mimic, key, source=source, where=where, default=0.0)
 
 
+def _check_axis(text: str, *, source: str, where: str) -> None:
+    """A non-zero axis whose length can be computed: its largest component within AXIS_RANGE.
+
+    The length is computed after scaling by the largest component, so it cannot over- or
+    underflow here; the range keeps it from doing so in urdfdom and Pinocchio, which do not
+    scale.
+    """
+    vector = _floats(text, 3, what="<axis xyz>", source=source, where=where, bound=math.inf)
+    largest = max(abs(x) for x in vector)
+    if largest == 0:
+        problem = f"<axis xyz> must be a non-zero vector, got {text!r}"
+        raise URDFError(source, problem, element=where)
+    length = largest * math.sqrt(sum((x / largest) ** 2 for x in vector))
+    low, high = AXIS_RANGE
+    if not low <= largest <= high:
+        raise URDFError(
+            source,
+            f"<axis xyz> must have its largest component within {low:g} .. {high:g} "
+            f"(a length of {length:.3g} over- or underflows when normalised; write a unit "
+            f"vector), got {text!r}",
+            element=where,
+        )
+
+
 def _check_limit(joint: ET.Element, kind: str, *, source: str, where: str) -> None:
     limit = joint.find("limit")
     if limit is None:
@@ -223,11 +268,11 @@ def _check_limit(joint: ET.Element, kind: str, *, source: str, where: str) -> No
             )
         return
     for key in ("effort", "velocity"):
-        value = _number(limit, key, source=source, where=where)
+        value = _number(limit, key, source=source, where=where, bound=math.inf)
         if value < 0:
             raise URDFError(source, f"<limit {key}> must be >= 0, got {value!r}", element=where)
-    lower = _number(limit, "lower", source=source, where=where, default=0.0)
-    upper = _number(limit, "upper", source=source, where=where, default=0.0)
+    lower = _number(limit, "lower", source=source, where=where, default=0.0, bound=math.inf)
+    upper = _number(limit, "upper", source=source, where=where, default=0.0, bound=math.inf)
     if kind in _LIMITED and lower > upper:
         raise URDFError(
             source,

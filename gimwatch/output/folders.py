@@ -22,12 +22,10 @@ folder, the lock and any parent folder created for the target are removed.
 
 from __future__ import annotations
 
-import ctypes
 import errno
 import fcntl
 import json
 import os
-import secrets
 import shutil
 import stat
 import tempfile
@@ -37,6 +35,7 @@ from types import TracebackType
 
 from gimwatch.errors import OutputError
 from gimwatch.output.atomic import describe_kind, signals_held, write_json_atomic
+from gimwatch.output.swap import LOCK, STAGING, carry, is_temporary, remove_stale, swap
 
 __all__ = [
     "MARKER",
@@ -50,8 +49,6 @@ __all__ = [
 
 #: The file that makes a folder a gimwatch results folder.
 MARKER = ".gimwatch-results.json"
-_LOCK, _STAGING, _OLD = ".gimwatch-lock", ".gimwatch-staging-", ".gimwatch-old-"
-_RENAME_EXCHANGE, _AT_FDCWD = 2, -100
 
 
 #: Called with the name of each phase of a write (``"write"``: the files are in the staging
@@ -148,7 +145,7 @@ class _Lock:
     """An exclusive ``flock`` on ``.NAME.gimwatch-lock`` beside a results folder."""
 
     def __init__(self, target: Path, shown: str) -> None:
-        self.path = target.parent / f".{target.name}{_LOCK}"
+        self.path = target.parent / f".{target.name}{LOCK}"
         while True:
             try:
                 fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
@@ -232,22 +229,24 @@ class Reservation:
         self.committed = False
 
     def __enter__(self) -> Reservation:
-        with signals_held():
-            held = _HELD.get(self.target)
-            if held is not None:
-                held[1] += 1
-                return self
-            created = _make_parents(self.target.parent, self.shown)
-            try:
-                lock = _Lock(self.target, self.shown)
-            except BaseException:
-                _remove_parents(created)
-                raise
-            _HELD[self.target] = [lock, 1, created]
+        held = False
         try:
+            with signals_held():
+                if self.target in _HELD:
+                    _HELD[self.target][1] += 1
+                else:
+                    created = _make_parents(self.target.parent, self.shown)
+                    try:
+                        lock = _Lock(self.target, self.shown)
+                    except BaseException:
+                        _remove_parents(created)
+                        raise
+                    _HELD[self.target] = [lock, 1, created]
+                held = True
             check_folder_target(self.target)  # it may have changed before we held the lock
-        except BaseException:
-            self.__exit__(None, None, None)
+        except BaseException:  # a refusal, or a signal delivered on leaving signals_held
+            if held:
+                Reservation.__exit__(self, None, None, None)
             raise
         return self
 
@@ -293,17 +292,14 @@ class ResultsFolder(Reservation):
 
     def __enter__(self) -> ResultsFolder:
         super().__enter__()
-        with signals_held():
-            try:
-                self.staging = Path(
-                    tempfile.mkdtemp(
-                        prefix=f".{self.target.name}{_STAGING}", dir=self.target.parent
-                    )
-                )
-            except OSError as exc:
-                super().__exit__(None, None, None)
-                raise OutputError(self.shown, _problem(exc)) from exc
-        _remove_stale(self.target, keep=self.staging)
+        try:
+            with signals_held():
+                prefix = f".{self.target.name}{STAGING}"
+                self.staging = Path(tempfile.mkdtemp(prefix=prefix, dir=self.target.parent))
+            remove_stale(self.target, keep=self.staging)
+        except BaseException as exc:  # a signal delivered on leaving signals_held, included
+            self.__exit__(type(exc), exc, exc.__traceback__)  # raises OutputError for OSError
+            raise
         return self
 
     def __exit__(
@@ -312,10 +308,10 @@ class ResultsFolder(Reservation):
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        with signals_held():
+        with signals_held():  # one block: a signal cannot come between the two clean-ups
             if not self.committed and self.staging is not None:
                 shutil.rmtree(self.staging, ignore_errors=True)
-        super().__exit__(kind, exc, tb)
+            super().__exit__(kind, exc, tb)
         staging = str(self.staging)
         if isinstance(exc, OutputError) and exc.path.startswith(staging):
             raise OutputError(self.shown, exc.problem) from exc  # name the folder, not its copy
@@ -339,16 +335,16 @@ class ResultsFolder(Reservation):
             carried = set()
             for entry in os.scandir(previous) if previous else ():
                 name = entry.name
-                if name in written or name == MARKER or _is_temporary(name):
+                if name in written or name == MARKER or is_temporary(name):
                     continue
                 if name in ours and not self.keep_previous:
                     continue
-                _carry(Path(entry.path), self.staging / name)
+                carry(Path(entry.path), self.staging / name)
                 carried.add(name)
             write_marker(self.staging, self.writer, written | (carried & ours))
             with signals_held():
                 check_folder_target(self.target)
-                _swap(self.staging, self.target)
+                swap(self.staging, self.target)
                 self.committed = True
                 _phase("swap")
                 shutil.rmtree(self.staging, ignore_errors=True)  # now the previous folder
@@ -363,83 +359,3 @@ def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
-
-
-def _is_temporary(name: str) -> bool:
-    return _LOCK in name or _STAGING in name or _OLD in name
-
-
-def _carry(source: Path, destination: Path) -> None:
-    """Rebuild ``source`` at ``destination`` with hard links (copies where links fail)."""
-    mode = os.lstat(source).st_mode
-    if stat.S_ISDIR(mode):
-        os.mkdir(destination)
-        for entry in os.scandir(source):
-            if not _is_temporary(entry.name):
-                _carry(Path(entry.path), destination / entry.name)
-        shutil.copystat(source, destination, follow_symlinks=False)
-    elif stat.S_ISLNK(mode):
-        os.symlink(os.readlink(source), destination)
-    else:
-        try:
-            os.link(source, destination, follow_symlinks=False)
-        except OSError:
-            if not stat.S_ISREG(mode):
-                raise
-            shutil.copy2(source, destination)
-
-
-def _exchange(a: Path, b: Path) -> bool:
-    """Swap two paths in one step (Linux ``renameat2``); False where that is not available."""
-    try:
-        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
-    except (OSError, AttributeError):
-        return False
-    result = renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE)
-    if result == 0:
-        return True
-    code = ctypes.get_errno()
-    if code in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
-        return False
-    raise OSError(code, os.strerror(code), str(b))
-
-
-def _swap(staging: Path, target: Path) -> None:
-    """Put ``staging`` at ``target``; afterwards ``staging`` holds the previous folder, if any."""
-    if not target.exists():
-        os.rename(staging, target)
-        return
-    if _exchange(staging, target):
-        return
-    old = target.parent / f".{target.name}{_OLD}{secrets.token_hex(4)}"
-    os.rename(target, old)
-    try:
-        os.rename(staging, target)
-    except BaseException:
-        os.rename(old, target)
-        raise
-    os.rename(old, staging)
-
-
-def _remove_stale(target: Path, *, keep: Path) -> None:
-    """Clear what a killed writer of ``target`` left (we hold its lock).
-
-    Its staging folders are removed; a previous folder it had moved aside (the two-rename
-    swap) is put back when nothing took its place, else removed.
-    """
-    prefixes = (f".{target.name}{_STAGING}", f".{target.name}{_OLD}")
-    try:
-        entries = sorted(os.scandir(target.parent), key=lambda e: e.name)
-    except OSError:
-        return
-    for entry in entries:
-        if not entry.name.startswith(prefixes) or Path(entry.path) == keep:
-            continue
-        with signals_held():
-            if _OLD in entry.name and not os.path.lexists(target):
-                try:
-                    os.rename(entry.path, target)
-                    continue
-                except OSError:
-                    pass
-            shutil.rmtree(entry.path, ignore_errors=True)

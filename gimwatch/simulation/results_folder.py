@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from gimwatch.metrics.watch import estimator_quality
+from gimwatch.metrics.estimator_quality import estimator_quality
 from gimwatch.output.atomic import write_json_atomic, write_npz_atomic, write_text_atomic
 from gimwatch.output.environment import versions
 from gimwatch.output.folders import ResultsFolder
@@ -44,7 +44,7 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
             delta = watch["watch_scaled_diagonal_ratio"] / (trajectory.alpha or 1.0)
         if delta is not None:
             result = estimator_quality(watch["watch_kappa"], delta)
-            quality = asdict(result) if result else "fewer than 3 samples"
+            quality = asdict(result) if result else "fewer than 2 samples"
     maxima = {
         key.removeprefix("watch_"): float(np.max(value))
         for key, value in watch.items()

@@ -111,6 +111,7 @@ class Simulation:
             alarm_metric=spec.alarm_metric,
             alarm_threshold=spec.alarm_threshold,
             dynamics=self.backend,
+            warn=False,  # the scene's alarm action reports the alarm
         )
         self.rhs_evaluations = 0
         self.actions: list[str] = []

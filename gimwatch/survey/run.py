@@ -34,6 +34,7 @@ import scipy.linalg
 from gimwatch.errors import ConditioningError, GimwatchError, InputError, RobotError
 from gimwatch.metrics.conditioning import ldlt_pivots, udut_pivots
 from gimwatch.metrics.dense_analysis import check_robot_gim
+from gimwatch.metrics.estimator_quality import correlations, estimator_quality
 from gimwatch.model.inertia import gim
 from gimwatch.model.robots import Robot, example_robot_names, load_robot, neutral_configuration
 from gimwatch.model.robots import random_configurations as _random_configurations
@@ -41,7 +42,6 @@ from gimwatch.survey.sweep import Task, run_sweep
 from gimwatch.survey.trajectory import (
     TrajectorySettings,
     TrajectoryStatistics,
-    correlations,
     run_trajectory,
     skip_reason,
     summarize_runs,
@@ -249,10 +249,10 @@ class SurveyResult:
 
 def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> RobotSurvey:
     kappa, delta = metrics["kappa"], metrics["delta"]
-    alpha = float(kappa[0] / delta[0]) if index[0] == 0 else float("nan")
-    later = index > 0
-    error = np.abs(alpha * delta[later] - kappa[later]) / kappa[later]
+    # t0 is the neutral configuration; without it (its M was refused) there is no α
+    quality = estimator_quality(kappa, delta) if index[0] == 0 else None
     pearson, spearman = correlations(delta, kappa)
+    nan = float("nan")
     quantiles = {
         key: {name: float(np.quantile(metrics[key], level)) for name, level in QUANTILES.items()}
         for key in ("kappa", "delta", "pivot_forward", "pivot_backward")
@@ -281,12 +281,12 @@ def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> Robot
         dof_names=robot.dof_names,
         sample_index=index,
         metrics=metrics,
-        alpha=alpha,
+        alpha=nan if quality is None else quality.alpha,
         quantiles=quantiles,
         pearson_log=pearson,
         spearman=spearman,
-        alpha_delta_rel_error_median=float(np.median(error)) if error.size else float("nan"),
-        alpha_delta_rel_error_max=float(np.max(error)) if error.size else float("nan"),
+        alpha_delta_rel_error_median=nan if quality is None else quality.median_relative_error,
+        alpha_delta_rel_error_max=nan if quality is None else quality.max_relative_error,
         worst=worst,
         extreme_dofs=extreme,
         lambda_min_on_min_diagonal=aligned,

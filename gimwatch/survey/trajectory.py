@@ -23,14 +23,13 @@ over runs, and the median and maximum error over every sample after t0 of every 
 from __future__ import annotations
 
 import math
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.stats
 
 from gimwatch.errors import InputError
+from gimwatch.metrics.estimator_quality import estimator_quality, relative_errors
 from gimwatch.model.inertia import gim_diagonal
 from gimwatch.model.robots import Robot
 from gimwatch.simulation.scene import Scene, parse_scene
@@ -42,7 +41,6 @@ __all__ = [
     "SurveyRun",
     "TrajectorySettings",
     "TrajectoryStatistics",
-    "correlations",
     "run_trajectory",
     "skip_reason",
     "summarize_runs",
@@ -188,21 +186,6 @@ class SurveyRun:
         return float(self.kappa.max() / self.kappa.min()) if self.kappa.size else math.nan
 
 
-def correlations(delta: np.ndarray, kappa: np.ndarray) -> tuple[float, float]:
-    """Pearson r(log δ, log κ) and Spearman ρ(δ, κ); NaN with < 3 samples or a constant one."""
-    if delta.size < 3 or np.ptp(delta) == 0 or np.ptp(kappa) == 0:
-        return math.nan, math.nan
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", scipy.stats.ConstantInputWarning)
-        pearson = scipy.stats.pearsonr(np.log(delta), np.log(kappa)).statistic
-        spearman = scipy.stats.spearmanr(delta, kappa).statistic
-    return float(pearson), float(spearman)
-
-
-def _relative_error(kappa: np.ndarray, alpha_delta: np.ndarray) -> np.ndarray:
-    return np.abs(alpha_delta[1:] - kappa[1:]) / kappa[1:]
-
-
 def run_trajectory(
     robot: Robot, q0: np.ndarray, start_sample: int, settings: TrajectorySettings
 ) -> SurveyRun:
@@ -230,8 +213,7 @@ def run_trajectory(
     watch = trajectory.watch
     kappa, delta = watch["watch_kappa"], watch["watch_diagonal_ratio"]
     alpha_delta = watch["watch_scaled_diagonal_ratio"]
-    error = _relative_error(kappa, alpha_delta)
-    pearson, spearman = correlations(delta, kappa)
+    quality = estimator_quality(kappa, delta)
     return SurveyRun(
         start_sample=start_sample,
         status=status,
@@ -244,10 +226,10 @@ def run_trajectory(
         delta=delta,
         alpha_delta=alpha_delta,
         alpha=math.nan if trajectory.alpha is None else float(trajectory.alpha),
-        pearson_log=pearson,
-        spearman=spearman,
-        alpha_delta_rel_error_median=float(np.median(error)) if error.size else math.nan,
-        alpha_delta_rel_error_max=float(np.max(error)) if error.size else math.nan,
+        pearson_log=math.nan if quality is None else quality.pearson_log,
+        spearman=math.nan if quality is None else quality.spearman,
+        alpha_delta_rel_error_median=math.nan if quality is None else quality.median_relative_error,
+        alpha_delta_rel_error_max=math.nan if quality is None else quality.max_relative_error,
     )
 
 
@@ -293,7 +275,7 @@ def summarize_runs(
 ) -> TrajectoryStatistics:
     """Per-robot statistics over the completed runs (see the module docstring)."""
     done = [run for run in runs if run.status == "completed"]
-    error = np.concatenate([_relative_error(r.kappa, r.alpha_delta) for r in done] or [[]])
+    error = np.concatenate([relative_errors(r.kappa, r.alpha_delta) for r in done] or [[]])
     return TrajectoryStatistics(
         runs=tuple(runs),
         errors=tuple(errors),
