@@ -6,7 +6,13 @@ from pathlib import Path
 
 import pytest
 
-from gimwatch.bench.cost_page import COST_END, COST_START, claim_table, update_cost_page
+from gimwatch.bench.cost_page import (
+    COST_END,
+    COST_START,
+    claim_table,
+    tracker_targets,
+    update_cost_page,
+)
 from gimwatch.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -22,8 +28,9 @@ def test_cost_table_is_generated_from_the_committed_files(tmp_path):
         "run `python -m gimwatch.bench.cost_page docs/findings/cost.md benchmarks/cost`"
     )
     block = PAGE.read_text(encoding="utf-8").split(COST_START)[1].split(COST_END)[0]
-    assert block.strip() == claim_table(FOLDER)
+    assert block.strip() == claim_table(FOLDER) + "\n\n" + tracker_targets(FOLDER)
     assert block.count("\n| ") == 5  # header separator + δ, αδ, tracker, κ-eig
+    assert block.count("\n- ") == 5  # accuracy, n = 100, 200, 400, the 1,000-link scene
 
 
 def test_the_table_quotes_the_files():

@@ -1176,13 +1176,18 @@ def test_claims_quote_every_demo_estimator_error():
 
 def test_tracker_prose_is_the_committed_cost_run():
     rows = [r for r in _csv("cost/tracker_samples.csv") if r["method"] == "tracker"]
-    cheaper = [int(r["n"]) for r in rows if r["vs_dense"] != "nan" and float(r["vs_dense"]) < 1]
-    dearer = [int(r["n"]) for r in rows if r["vs_dense"] != "nan" and float(r["vs_dense"]) >= 1]
+    ratios = {int(r["n"]): float(r["vs_dense"]) for r in rows if r["vs_dense"] != "nan"}
     page = "docs/findings/cost.md"
-    _find(page, r"the tracker breaks even with it at about a hundred links")
-    assert min(cheaper) == 100 and max(dearer) < 100
-    _find(page, r"for a few dozen O\(n\) products per sample")
-    assert all(12 <= float(r["products_median"]) <= 48 for r in rows)
+    _find(page, r"It is cheaper than a dense eigen-solve at every size measured")
+    assert all(ratio < 1 for ratio in ratios.values())
+    _find(page, r"\(n = 20 to\s+400\)")
+    assert min(ratios) == 20 and max(ratios) == 400
+    _find(page, r"to under a fiftieth of the dense cost at 400 links")
+    assert ratios[400] < 1 / 50
+    match = _find(page, r"for (\d+)–(\d+) O\(n\) products and one O\(n\) factorization")
+    medians = [float(r["products_median"]) for r in rows]
+    assert [int(match.group(1)), int(match.group(2))] == [min(medians), max(medians)]
+    assert all(float(r["factors_median"]) == 1 for r in rows)
 
 
 def test_bench_block_work_precision_table_is_the_committed_csv():

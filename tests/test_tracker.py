@@ -129,6 +129,26 @@ def test_lambda_min_falling_below_the_shift_is_detected_and_refactored():
             assert result.factors == 1, result
 
 
+def test_compiled_path_recovers_from_a_jump_by_a_cold_start():
+    """λmax falls 14× between two samples (bent chain, then curled): the warm result moved
+    beyond the jump rule, the sample is redone cold (reported), and the next is warm again."""
+    robot = load_robot("chain:10")
+    data = robot.new_data()
+    tracker = KappaTracker(denoc_model(robot).lean(), robot.nv)
+    fallbacks = []
+    for q in (np.full(10, 0.3), np.full(10, 0.301), np.full(10, 1.0), np.full(10, 1.001)):
+        result = tracker.sample(q)
+        values = np.linalg.eigvalsh(pin.crba(robot.model, data, q))
+        assert result.kappa == pytest.approx(values[-1] / values[0], rel=RTOL)
+        fallbacks.append(result.fallback)
+    assert fallbacks == ["start", "", "cold", ""]
+    # the eigenvectors carried over: a Ritz residual ‖r‖ ~ sqrt(rtol · θ · gap) gives θ to rtol
+    top, low = tracker.eigenvectors()
+    M = pin.crba(robot.model, data, np.full(10, 1.001))
+    assert np.linalg.norm(M @ top - (top @ M @ top) * top) <= 1e-4 * np.linalg.norm(M)
+    assert abs(low @ np.linalg.eigh(M)[1][:, 0]) == pytest.approx(1.0, abs=1e-8)
+
+
 def test_tracker_leaves_the_lean_model_configuration_alone():
     """The tracker factors M − σ·1 in its own buffers: a LeanModel configured by its owner
     (a simulation backend, the watch) still solves with M(q) of the owner's q."""

@@ -19,14 +19,14 @@ from pathlib import Path
 from gimwatch.errors import InputError
 from gimwatch.output.atomic import write_text_atomic
 
-__all__ = ["COST_END", "COST_START", "claim_table", "update_cost_page"]
+__all__ = ["COST_END", "COST_START", "claim_table", "tracker_targets", "update_cost_page"]
 
 COST_START = "<!-- cost:start -->"
 COST_END = "<!-- cost:end -->"
 _ESTIMATORS = (
     ("delta", "δ = max M_ii / min M_ii (O(n) diagonal)"),
     ("alpha_delta", "αδ, α = κ(t0)/δ(t0) (Eq. 15)"),
-    ("tracker", "κ tracker (warm-started Lanczos, rtol 1e-10)"),
+    ("tracker", "κ tracker (warm-started Lanczos, shift-invert λmin, rtol 1e-10)"),
     ("kappa_eig", "κ by CRBA + `eigvalsh` (reference)"),
 )
 
@@ -77,8 +77,23 @@ def claim_table(folder: str | Path) -> str:
     return "\n".join(lines)
 
 
+def tracker_targets(folder: str | Path) -> str:
+    """The tracker's targets, met or not, as the bench states them, from the files (a list)."""
+    from gimwatch.bench.tracker_cost import verdicts
+
+    folder = Path(folder)
+    lines = verdicts(
+        _rows(folder, "tracker_samples"),
+        _rows(folder, "tracker_claim"),
+        _rows(folder, "tracker_chain_1000"),
+    )
+    return "\n".join(f"- {line}" for line in lines)
+
+
 def update_cost_page(page: str | Path, folder: str | Path) -> Path:
-    """Replace the block between the cost markers of ``page`` with :func:`claim_table`.
+    """Replace the block between the cost markers of ``page`` with the table and the targets.
+
+    The block is :func:`claim_table`, a blank line, then :func:`tracker_targets`.
 
     Raises:
         InputError: The page lacks the markers, or a bench file is missing.
@@ -88,7 +103,7 @@ def update_cost_page(page: str | Path, folder: str | Path) -> Path:
     pattern = re.compile(re.escape(COST_START) + r".*?" + re.escape(COST_END), re.DOTALL)
     if not pattern.search(text):
         raise InputError(str(page), f"a page with {COST_START} and {COST_END}", "no markers")
-    block = "\n".join([COST_START, claim_table(folder), COST_END])
+    block = "\n".join([COST_START, claim_table(folder), "", tracker_targets(folder), COST_END])
     return write_text_atomic(page, pattern.sub(lambda _: block, text))
 
 
