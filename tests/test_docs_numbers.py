@@ -1211,3 +1211,17 @@ def test_bench_block_work_precision_table_is_the_committed_csv():
     walls = {row["10-link chain"]: row["wall to 1e-10 rad (s)"] for row in table}
     assert walls["gimwatch DOP853"] == _g3(acceptance["gimwatch_dop853_interpolated_s"])
     assert walls["mujoco RK4"] == _g3(acceptance["mujoco_rk4_interpolated_s"])
+
+
+def test_watch_page_quotes_the_committed_mujoco_loop_run():
+    with (BENCH / "watch_mujoco" / "watch_mujoco.csv").open(newline="") as handle:
+        rows = [r for r in csv.DictReader(handle) if r["source"] == "data"]
+    match = _find(
+        "docs/watch.md",
+        r"one sample costs\s+([\d.]+)–([\d.]+) `mj_step`s watching δ and (\d+)–(\d+) watching κ",
+    )
+    delta = [float(r["sample_vs_step"]) for r in rows if r["watch"] == "delta"]
+    kappa = [float(r["sample_vs_step"]) for r in rows if r["watch"] == "kappa"]
+    low, high, k_low, k_high = (float(x) for x in match.groups())
+    assert (low, high) == (round(min(delta), 2), round(max(delta), 1))
+    assert (k_low, k_high) == (int(min(kappa)), int(max(kappa)))
