@@ -139,7 +139,7 @@ def test_solo12_base_tumbling_matches_a_quaternion_embedding_integration():
     model = load_robot("solo12", floating=True).model
     assert model.joints[1].shortname() == "JointModelFreeFlyer"
     data = model.createData()
-    nq, nv = model.nq, model.nv
+    nq = model.nq
 
     def rhs(_t, y):
         q, vel = y[:nq].copy(), y[nq:]
