@@ -14,7 +14,7 @@ with that copy first on ``PYTHONPATH``, and reports each mutant as
 Before the mutants, each distinct subset runs once on the unmutated copy and must pass. Exit
 status 0 only when every mutant is caught. Not part of ``make test`` (it takes minutes).
 
-Usage: ``python tests/mutations.py [--jobs 2] [--timeout 600] [--list] [ID ...]``
+Usage: ``python tests/mutations.py [--jobs 2] [--timeout 600] [--list] [--match TEXT] [ID ...]``
 """
 
 from __future__ import annotations
@@ -60,6 +60,15 @@ LONG = ("tests/test_longchain.py",)
 STRESS_QUICK = ("tests/test_stress.py", "-m", "not slow")
 #: the compiled kernels behind analyze_linear and extreme_eigenvalues (gimwatch/denoc/linear.py)
 COMPILED_STATE = ("tests/test_longchain.py", "-k", "compiled_state or closed_forms or lanczos")
+TRAJECTORY = ("tests/test_trajectory_reference.py",)
+URDF_VALUES = (
+    "tests/test_bad_inputs.py",
+    "-k",
+    "bad_urdf_file_raises or warning_cases or library_warning",
+)
+TRACKER = ("tests/test_tracker.py", "tests/test_tracker_krylov.py")
+SWAP = ("tests/test_faults_folders.py", "tests/test_interrupted_outputs.py", "-k", "not signal")
+ESTIMATOR = ("tests/test_estimator_quality.py",)
 
 MUTANTS = (
     # --- DeNOC recursions (numpy, gimwatch/denoc/recursions.py) ---
@@ -415,6 +424,177 @@ MUTANTS = (
         ("tests/test_watch.py",),
         "αδ recalibrated at every sample (then it equals κ, tuned after the fact)",
     ),
+    # --- second round (issue 28): manifold integration, model values, the κ tracker, the
+    # watch sources, results folders, estimator statistics. The old text of each is one line
+    # (or two) chosen where a rewrite is unlikely; `--list` shows the file of each. ---
+    Mutant(
+        "manifold-reanchor-forgotten",
+        "gimwatch/simulation/integrators.py",
+        "                        reanchored = True\n",
+        "                        reanchored = False\n",
+        TRAJECTORY,
+        "a mid-piece re-anchoring ends the piece: the sample gets the state of an earlier time",
+    ),
+    Mutant(
+        "manifold-local-rate-dropped",
+        "gimwatch/simulation/integrators.py",
+        "return np.concatenate((chart.local_rate(anchor, dq, v_), a))",
+        "return np.concatenate((v_, a))",
+        TRAJECTORY,
+        "adaptive pieces integrate dΔq/dt = v, not J(Δq)⁻¹ v (wrong off the anchor)",
+    ),
+    Mutant(
+        "manifold-reanchor-velocity-stale",
+        "gimwatch/simulation/integrators.py",
+        "                v = solver.y[nv:].copy()\n",
+        "                v = solver.y[nv:].copy() if not reanchored else v\n",
+        TRAJECTORY,
+        "after a mid-piece re-anchoring the next piece starts from the old velocity",
+    ),
+    Mutant(
+        "manifold-rk4-stage-rate",
+        "gimwatch/simulation/integrators.py",
+        "d2 = chart.local_rate(q, 0.5 * dt * d1, v2)",
+        "d2 = v2",
+        ("tests/test_manifold.py", "-k", "rk4"),
+        "RK4's second stage takes v as the local rate (second order on SE(3))",
+    ),
+    Mutant(
+        "urdf-negative-mass-accepted",
+        "gimwatch/model/urdf_values.py",
+        "    if mass < 0:\n",
+        "    if mass < -1e3:\n",
+        URDF_VALUES,
+        "a negative mass passes the URDF value checks",
+    ),
+    Mutant(
+        "urdf-psd-checks-largest-moment",
+        "gimwatch/model/urdf_values.py",
+        "if moments[0] < -(INERTIA_ATOL_KG_M2",
+        "if moments[-1] < -(INERTIA_ATOL_KG_M2",
+        URDF_VALUES,
+        "the positive semi-definiteness test looks at the largest principal moment",
+    ),
+    Mutant(
+        "urdf-triangle-wrong-pair",
+        "gimwatch/model/urdf_values.py",
+        "return bool(a + b >= c * (1 - INERTIA_RTOL) - 1e-12)",
+        "return bool(a + c >= b * (1 - INERTIA_RTOL) - 1e-12)",
+        URDF_VALUES,
+        "the triangle inequality tested on the wrong pair (never doubtful)",
+    ),
+    Mutant(
+        "urdf-products-misread",
+        "gimwatch/model/urdf_values.py",
+        'for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")',
+        'for key in ("ixx", "ixy", "ixz", "iyy", "izz", "iyz")',
+        URDF_VALUES,
+        "iyz and izz swapped when the inertia is read for the checks",
+    ),
+    Mutant(
+        "urdf-limit-order-ignored",
+        "gimwatch/model/urdf_values.py",
+        "if kind in _LIMITED and lower > upper:",
+        "if kind in _LIMITED and lower > upper + 1e3:",
+        URDF_VALUES,
+        "a joint limit with lower > upper is accepted",
+    ),
+    Mutant(
+        "tracker-kato-temple-loose",
+        "gimwatch/metrics/tracker_krylov.py",
+        "estimate = rnorm2 / (theta * gap) / (1.0 + sigma * theta)",
+        "estimate = 1e-4 * rnorm2 / (theta * gap) / (1.0 + sigma * theta)",
+        TRACKER,
+        "the Kato–Temple error estimate 1e4 too small: the tracker stops before rtol",
+    ),
+    Mutant(
+        "tracker-gap-without-second",
+        "gimwatch/metrics/tracker_krylov.py",
+        "gap = theta - second if m >= 2 else abs(theta)",
+        "gap = abs(theta)",
+        TRACKER,
+        "the gap rule ignores the second Ritz value (optimistic near a crossing)",
+    ),
+    Mutant(
+        "watch-source-free-rotation",
+        "gimwatch/metrics/watch_sources.py",
+        "M[lin, :] = R.T @ M[lin, :]",
+        "M[lin, :] = R @ M[lin, :]",
+        ("tests/test_watch_sources.py",),
+        "a MuJoCo free joint's linear block rotated the wrong way on one side",
+    ),
+    Mutant(
+        "watch-source-armature-kept",
+        "gimwatch/metrics/watch_sources.py",
+        "M[np.diag_indices(self.nv)] -= self._armature",
+        "M[np.diag_indices(self.nv)] -= 0.0 * self._armature",
+        ("tests/test_watch_sources.py",),
+        "armature=False leaves MuJoCo's armature in the full M",
+    ),
+    Mutant(
+        "watch-source-diagonal-sign",
+        "gimwatch/metrics/watch_sources.py",
+        "if not np.all(np.isfinite(d) & (d > 0)):",
+        "if not np.all(np.isfinite(d)):",
+        ("tests/test_watch_sources.py",),
+        "a held diagonal with a zero or negative entry is accepted",
+    ),
+    Mutant(
+        "swap-no-rollback",
+        "gimwatch/output/swap.py",
+        "    except BaseException:\n        os.rename(old, target)\n        raise\n",
+        "    except BaseException:\n        raise\n",
+        SWAP,
+        "a failed second rename leaves the previous results folder moved aside",
+    ),
+    Mutant(
+        "swap-carries-temporaries",
+        "gimwatch/output/swap.py",
+        "            if not is_temporary(entry.name):\n",
+        "            if True:\n",
+        SWAP,
+        "carried folders take the writer's lock and staging folders with them",
+    ),
+    Mutant(
+        "atomic-temporary-left",
+        "gimwatch/output/atomic.py",
+        "            Path(tmp).unlink(missing_ok=True)\n",
+        "            pass\n",
+        SWAP,
+        "a failed atomic write leaves its temporary file behind",
+    ),
+    Mutant(
+        "estimator-pearson-linear",
+        "gimwatch/metrics/estimator_quality.py",
+        "scipy.stats.pearsonr(np.log(delta), np.log(kappa))",
+        "scipy.stats.pearsonr(delta, kappa)",
+        ESTIMATOR,
+        "Pearson of δ with κ, not of their logarithms",
+    ),
+    Mutant(
+        "estimator-t0-in-errors",
+        "gimwatch/metrics/estimator_quality.py",
+        "return np.abs(scaled[1:] - kappa[1:]) / kappa[1:]",
+        "return np.abs(scaled - kappa) / kappa",
+        ESTIMATOR,
+        "the relative errors include t0, where αδ = κ by construction",
+    ),
+    Mutant(
+        "estimator-max-scaled-is-delta",
+        "gimwatch/metrics/estimator_quality.py",
+        "max_scaled_diagonal_ratio=float(np.max(scaled))",
+        "max_scaled_diagonal_ratio=float(np.max(delta))",
+        ESTIMATOR,
+        "the largest αδ reported is the largest δ",
+    ),
+    Mutant(
+        "estimator-correlation-two-samples",
+        "gimwatch/metrics/estimator_quality.py",
+        "if delta.size < 3 or np.ptp(delta) == 0",
+        "if delta.size < 2 or np.ptp(delta) == 0",
+        ESTIMATOR,
+        "correlations reported from two samples (always ±1)",
+    ),
 )
 
 
@@ -478,12 +658,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--jobs", type=int, default=2, help="mutants run in parallel")
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per test run")
     parser.add_argument("--list", action="store_true", help="list the mutants and exit")
+    parser.add_argument(
+        "--match", default="", help="only the mutants whose id or file contains this text"
+    )
     args = parser.parse_args(argv)
     known = {m.id: m for m in MUTANTS}
     if len(known) != len(MUTANTS):
         raise SystemExit("duplicate mutant ids")
     if args.list:
-        for m in MUTANTS:
+        for m in MUTANTS if not args.match else [m for m in MUTANTS if args.match in m.id]:
             print(f"{m.id:34} {m.paths[0]:40} {m.why}")
         return 0
     unknown = [i for i in args.ids if i not in known]
@@ -491,6 +674,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"unknown mutant ids: {', '.join(unknown)}", file=sys.stderr)
         return 2
     selected = [known[i] for i in args.ids] if args.ids else list(MUTANTS)
+    selected = [m for m in selected if args.match in m.id or args.match in m.path]
+    if not selected:
+        print(f"no mutant matches {args.match!r}", file=sys.stderr)
+        return 2
     jobs = max(1, min(args.jobs, len(selected)))
     with tempfile.TemporaryDirectory(prefix="gimwatch-mutation-") as scratch:
         trees = [_copy_tree(Path(scratch) / f"tree{k}") for k in range(jobs)]

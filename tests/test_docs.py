@@ -83,6 +83,8 @@ def test_fence_parser_reads_markers(tmp_path):
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.relative_to(ROOT).as_posix())
 def test_python_blocks_run(page, tmp_path, monkeypatch):
     matplotlib.use("Agg")  # a block that plots must not open a window
+    if any(".to_dataframe(" in b.code for b in python_blocks(page) if b.skip_reason is None):
+        pytest.importorskip("pandas", reason=f"{page.name} calls to_dataframe(): pandas extra")
     monkeypatch.chdir(tmp_path)  # "runnable from any directory"
     namespace: dict = {"__name__": "__docs__"}
     ran = 0

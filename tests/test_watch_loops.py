@@ -195,6 +195,7 @@ def test_a_simulation_still_reports_its_alarms_without_warning():
 
 
 def test_the_dataframe_holds_the_arrays():
+    pytest.importorskip("pandas", reason="to_dataframe() needs the pandas extra")
     watch = Watch.from_matrices(3, ("kappa", "diagonal_ratio", "diagonal"))
     rng = np.random.default_rng(1)
     for k in range(5):
