@@ -88,11 +88,15 @@ def _start(args: list[str], phase: str, cwd: Path) -> subprocess.Popen:
         stderr=subprocess.PIPE,
         text=True,
     )
-    line = process.stderr.readline()
-    if line != f"gimwatch: paused at {phase}\n":
-        process.kill()
-        _, rest = process.communicate()
-        pytest.fail(f"no pause at {phase}: {line + rest}")
+    # wait for the state, not a time: read stderr up to the pause line (a loaded machine may
+    # let a progress bar or a warning come first); end of stream means it never paused
+    before = []
+    while (line := process.stderr.readline()) != f"gimwatch: paused at {phase}\n":
+        if not line:
+            process.kill()
+            _, rest = process.communicate()
+            pytest.fail(f"no pause at {phase}: {''.join(before) + rest}")
+        before.append(line)
     return process
 
 

@@ -125,8 +125,8 @@ _paused: set[str] = set()
 def fault_pause(phase: str) -> None:
     """Test hook: with ``GIMWATCH_FAULT_PAUSE=phase``, stop here until a signal arrives.
 
-    Prints ``gimwatch: paused at PHASE`` on stderr, waits (at most a minute) for SIGINT or
-    SIGTERM, then delivers it to the handler in place, as if it had arrived at this point.
+    Prints ``gimwatch: paused at PHASE`` on stderr, waits (at most ten minutes: a loaded test
+    machine may take long to send it) for SIGINT or SIGTERM, then delivers it to the handler in place, as if it had arrived at this point.
     Fault tests use it to signal a command at a chosen moment: ``import`` (before the
     command's modules are imported), ``compute`` (after the first step or chunk), ``write``
     (the files are in the staging folder), ``swap`` (the new folder is in place, the
@@ -141,7 +141,7 @@ def fault_pause(phase: str) -> None:
     previous = {s: signal.signal(s, lambda n, _: received.append(n)) for s in _SIGNALS}
     try:
         print(f"gimwatch: paused at {phase}", file=sys.stderr, flush=True)
-        deadline = time.monotonic() + 60.0
+        deadline = time.monotonic() + 600.0
         while not received and time.monotonic() < deadline:
             time.sleep(0.005)
     finally:
