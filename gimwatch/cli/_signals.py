@@ -126,7 +126,8 @@ def fault_pause(phase: str) -> None:
     """Test hook: with ``GIMWATCH_FAULT_PAUSE=phase``, stop here until a signal arrives.
 
     Prints ``gimwatch: paused at PHASE`` on stderr, waits (at most ten minutes: a loaded test
-    machine may take long to send it) for SIGINT or SIGTERM, then delivers it to the handler in place, as if it had arrived at this point.
+    machine may take long to send it) for SIGINT or SIGTERM, then delivers it to the handler
+    in place, as if it had arrived at this point.
     Fault tests use it to signal a command at a chosen moment: ``import`` (before the
     command's modules are imported), ``compute`` (after the first step or chunk), ``write``
     (the files are in the staging folder), ``swap`` (the new folder is in place, the
