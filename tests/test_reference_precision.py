@@ -79,3 +79,48 @@ def test_planar_and_tree_references_agree_to_the_last_bit_under_cancellation(nam
     np.testing.assert_allclose(a_tree, a_planar, rtol=1e-15, atol=0)
     # the comparison resolves the references' digits: at 20 digits they would not agree
     assert not _relative(_solve(tree(20), q, v, tau), a_planar) <= 1e-6
+
+
+def _max_relative(values, truth):
+    """max |x − t| / max |t| over matching entries (mpmath numbers), as a float."""
+    scale = max(abs(t) for t in truth)
+    return float(max(abs(x - t) for x, t in zip(values, truth, strict=True)) / scale)
+
+
+def test_planar_mass_matrix_keeps_fifty_digits():
+    """M(q) itself, not only q̈: tapered-30 (κ ≈ 8e19, so κ·eps ≈ 2e4).
+
+    Entries at d digits carry ~10^−d relative error: measured 3e-16 (15), 3e-31 (30),
+    below 1e-50 (50) against 100 digits. The tolerance 1e-40 sits between 30 and 50 digits
+    by ten orders each way. κ of this M happens to be well conditioned in its entries (a
+    15-digit M already gives λmin to 4e-16), so κ alone could not tell 15 digits from 50.
+    """
+    q, _, planar, _ = _case("tapered-30")
+    truth = list(planar(100).gim(q))
+    assert _max_relative(list(planar().gim(q)), truth) <= 1e-40
+    for digits in (15, 30):
+        assert not _max_relative(list(planar(digits).gim(q)), truth) <= 1e-40, digits
+    with mpmath.workdps(120):  # κ from the 50-digit M, eigenvalues at 120 digits
+        values = sorted(mpmath.eigsy(mpmath.matrix(planar().gim(q)), eigvals_only=True))
+        exact = sorted(mpmath.eigsy(mpmath.matrix(planar(100).gim(q)), eigvals_only=True))
+        assert abs(values[0] / exact[0] - 1) <= 1e-40
+        assert values[-1] / values[0] > 1e19  # the case is as ill-conditioned as stated
+
+
+def test_tree_aba_keeps_fifty_digits_in_mpmath():
+    """The tree reference's unrounded q̈ (``forward_dynamics_mp``) on tapered-30 (κ ≈ 8e19).
+
+    No cancellation is set up here (τ random): the 50-digit q̈ agrees with the 100-digit one
+    to 1e-40 of its size, 15 and 30 digits do not (measured 2.1e-16 and 3.9e-31). The float64
+    rounding of ``forward_dynamics`` would hide this; the mpmath values do not.
+    """
+    q, v, _, tree = _case("tapered-30")
+    tau = np.random.default_rng(4).uniform(-1.0, 1.0, q.size)
+    reference = tree(100)
+    with mpmath.workdps(100):
+        a = reference.forward_dynamics_mp(q, v, tau)
+    for digits, ok in ((None, True), (30, False), (15, False)):
+        with mpmath.workdps(100):
+            a_d = tree(digits).forward_dynamics_mp(q, v, tau)
+            error = _max_relative(a_d, a)
+        assert (error <= 1e-40) is ok, (digits, error)
