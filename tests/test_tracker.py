@@ -22,6 +22,9 @@ from gimwatch.stress.reference_planar import PlanarChainReference
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 RTOL = 1e-8  # issue 16: the tracker matches dense κ within 1e-8 relative at every sample
+#: The documented tracker rtol is 1e-10 per end (docs/scenes.md; κ to about 2e-10): where the
+#: reference resolves κ to ~1e-14 the tests hold it to 5e-10, a margin of 2.5 on κ's 2e-10.
+DOCUMENTED_RTOL_MARGIN = 5e-10
 
 
 def _paper_trajectory(n: int) -> np.ndarray:
@@ -169,8 +172,12 @@ def test_pinocchio_products_give_the_same_kappa():
     qs = np.linspace(0.0, 1.0, 5)[:, None] * np.linspace(-1, 1, robot.nq)[None, :]
     ours = track_kappa(denoc_model(robot).lean(), qs)
     theirs = track_kappa(PinocchioProducts(robot), qs)
-    for a, b in zip(ours, theirs, strict=True):
-        assert a.kappa == pytest.approx(b.kappa, rel=1e-8)
+    for q, a, b in zip(qs, ours, theirs, strict=True):
+        # each against LAPACK on CRBA's M (κ ≈ 1e2 here: eigvalsh resolves it to ~1e-14)
+        values = np.linalg.eigvalsh(pin.crba(robot.model, robot.new_data(), q))
+        kappa = values[-1] / values[0]
+        assert a.kappa == pytest.approx(kappa, rel=DOCUMENTED_RTOL_MARGIN)
+        assert b.kappa == pytest.approx(kappa, rel=DOCUMENTED_RTOL_MARGIN)
 
 
 class _Diagonalised:
