@@ -69,6 +69,7 @@ URDF_VALUES = (
 TRACKER = ("tests/test_tracker.py", "tests/test_tracker_krylov.py")
 SWAP = ("tests/test_faults_folders.py", "tests/test_interrupted_outputs.py", "-k", "not signal")
 ESTIMATOR = ("tests/test_estimator_quality.py",)
+PRECISION = ("tests/test_reference_precision.py", "-k", "keeps_fifty")
 
 MUTANTS = (
     # --- DeNOC recursions (numpy, gimwatch/denoc/recursions.py) ---
@@ -594,6 +595,24 @@ MUTANTS = (
         "if delta.size < 2 or np.ptp(delta) == 0",
         ESTIMATOR,
         "correlations reported from two samples (always ±1)",
+    ),
+    Mutant(
+        "reference-planar-gim-15-digits",
+        "gimwatch/stress/reference_planar.py",
+        '        with mpmath.workdps(self.dps):\n            D = self._parts(q, None)["D"]',
+        '        with mpmath.workdps(15):\n            D = self._parts(q, None)["D"]',
+        PRECISION,
+        "the planar reference computes M(q) at 15 digits",
+    ),
+    Mutant(
+        "reference-tree-aba-30-digits",
+        "gimwatch/stress/reference_tree.py",
+        "        with mpmath.workdps(self.dps):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        "        with mpmath.workdps(30):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        PRECISION,
+        "the tree reference's ABA runs at 30 digits",
     ),
 )
 
