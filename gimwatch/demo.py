@@ -37,7 +37,7 @@ DEMO_METRICS = (
 
 
 def paper_chain_table(n: int, *, duration_s: float = 5.0, sample_s: float = 0.01) -> dict:
-    """The scene table of the paper's swinging n-link chain (``scenes/chain_N.toml``)."""
+    """The scene table of the paper's swinging n-link chain (``gimwatch/scenes/chain_N.toml``)."""
     return {
         "robot": f"chain:{n}",
         "duration": duration_s,

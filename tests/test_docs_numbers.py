@@ -1156,7 +1156,7 @@ def test_startup_and_chain_1000_settings_are_the_committed_runs():
     summary = json.loads((BENCH / "chain_1000" / "summary.json").read_text())
     match = _find(
         "docs/findings/long-chains.md",
-        r"`scenes/chain_1000.toml` \(DOP853, rtol = atol = ([\d.e-]+), δ watched\) simulates "
+        r"`gimwatch simulate chain_1000` \(DOP853, rtol = atol = ([\d.e-]+), δ watched\) simulates "
         r"(\d+) s",
     )
     integrator = summary["integrator"]

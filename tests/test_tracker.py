@@ -20,7 +20,7 @@ from gimwatch.simulation.scene import load_scene, parse_scene
 from gimwatch.simulation.simulate import run_scene
 from gimwatch.stress.reference_planar import PlanarChainReference
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "gimwatch" / "scenes"
 RTOL = 1e-8  # issue 16: the tracker matches dense κ within 1e-8 relative at every sample
 
 

@@ -22,7 +22,7 @@ t=$(now); "$WORK/venv/bin/gimwatch" analyze ur5 > analyze.txt; analyze_s=$(since
 awk '/^```python/{n++; if (n == 1) {on = 1; next}} /^```$/{on = 0} on' \
   "$WORK/gimwatch/README.md" > quickstart.py
 t=$(now); "$WORK/venv/bin/python" quickstart.py > quickstart.txt; python_s=$(since "$t")
-t=$(now); "$WORK/venv/bin/gimwatch" simulate "$WORK/gimwatch/scenes/chain_10.toml" -o run \
+t=$(now); "$WORK/venv/bin/gimwatch" simulate chain_10 -o run \
   > simulate.txt 2>/dev/null; simulate_s=$(since "$t")
 t=$(now); "$WORK/venv/bin/gimwatch" demo -o demo-output > /dev/null 2>&1; demo_s=$(since "$t")
 cat > "$ROOT/benchmarks/newcomer/times.json" <<JSON

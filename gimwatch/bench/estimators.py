@@ -6,7 +6,7 @@ cost per evaluation is timed on a few samples (median). Sweeps:
 
 * ``random`` — independent configurations drawn uniformly within the joint limits;
 * ``swing`` — for the paper's 4-, 10- and 20-link chains, the samples of their swinging
-  trajectories (``scenes/chain_<n>.toml``: straight and horizontal at rest under gravity,
+  trajectories (``gimwatch/scenes/chain_<n>.toml``: straight and horizontal at rest under gravity,
   DOP853 at 1e-10, the first :data:`SWING_DURATION_S` seconds), where κ sweeps from its
   straight-chain maximum through folded configurations.
 

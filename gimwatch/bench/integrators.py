@@ -1,6 +1,6 @@
 """Section ``integrators``: work-precision of gimwatch's integrators, MuJoCo as a peer.
 
-The paper's swinging 10- and 20-link chains (``scenes/chain_10.toml``, ``chain_20.toml``:
+The paper's swinging 10- and 20-link chains (``gimwatch/scenes/chain_10.toml``, ``chain_20.toml``:
 straight and horizontal at rest, gravity −y in the plane of motion, 5 s) are run with every
 integrator of :class:`gimwatch.simulation.simulate.Simulation` and the ``aba`` backend, the δ watch
 on
@@ -27,7 +27,6 @@ import itertools
 import time
 import tomllib
 import warnings
-from pathlib import Path
 
 import numpy as np
 
@@ -35,13 +34,14 @@ from gimwatch.bench import BenchContext, SectionResult, Table, mujoco_peer
 from gimwatch.bench.plots import plot_work_precision
 from gimwatch.bench.report import markdown_table
 from gimwatch.errors import InputError
+from gimwatch.simulation.bundled_scenes import SCENES_DIR
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.scene_integrator import MAX_FIXED_STEPS
 from gimwatch.simulation.simulate import Simulation
 
 __all__ = ["CAP_S", "COLUMNS", "TARGET_ERROR_RAD", "chain_scene_table", "run"]
 
-SCENES = Path(__file__).resolve().parents[2] / "scenes"
+SCENES = SCENES_DIR
 ADAPTIVE = ("DOP853", "RK45", "Radau", "LSODA")
 FIXED = ("RK4", "semi-implicit-euler")
 TOLERANCES = tuple(10.0**-k for k in range(3, 13))
@@ -67,7 +67,7 @@ COLUMNS = (
 
 
 def chain_scene_table(n: int, *, duration_s: float | None = None) -> dict:
-    """The TOML table of ``scenes/chain_<n>.toml`` with the δ watch only and ``aba``.
+    """The TOML table of ``gimwatch/scenes/chain_<n>.toml`` with the δ watch only and ``aba``.
 
     Args:
         n: 4, 10 or 20 (the scenes that exist).

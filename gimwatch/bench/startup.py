@@ -89,11 +89,10 @@ def measure(context: BenchContext) -> tuple[Table, dict[str, float]]:
         if not context.quick:
             context.progress("  gimwatch demo (once)")
             once["gimwatch demo"] = _wall(["-m", "gimwatch", "demo", "-o", "demo"], cwd)
-        scene = Path(__file__).resolve().parents[2] / "scenes" / "chain_10.toml"
-        if scene.exists() and not context.quick:
+        if not context.quick:
             context.progress("  gimwatch simulate chain_10 (once)")
-            once["gimwatch simulate scenes/chain_10.toml"] = _wall(
-                ["-m", "gimwatch", "simulate", str(scene), "-o", "run"], cwd
+            once["gimwatch simulate chain_10"] = _wall(
+                ["-m", "gimwatch", "simulate", "chain_10", "-o", "run"], cwd
             )
     table = Table("startup", COLUMNS)
     medians = {}
@@ -149,10 +148,10 @@ def run(context: BenchContext) -> SectionResult:
             f"no GIF) takes {demo:.1f} s (target ≤ {DEMO_TARGET_S:g} s: "
             f"{verdict(summary['demo_target_met'])})."
         )
-    simulate = medians.get("gimwatch simulate scenes/chain_10.toml")
+    simulate = medians.get("gimwatch simulate chain_10")
     if simulate is not None:
         lines.append(
-            f"- `gimwatch simulate scenes/chain_10.toml` (5 s of the 10-link chain, DOP853 at "
+            f"- `gimwatch simulate chain_10` (5 s of the 10-link chain, DOP853 at "
             f"1e-10, κ and δ watched, results folder with plots) takes {simulate:.1f} s."
         )
     headline = "\n".join(lines)

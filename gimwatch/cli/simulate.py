@@ -21,7 +21,11 @@ HELP = "simulate a scene (TOML) and watch the conditioning of M(q)"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("scene", help="scene file (TOML); the format: docs/guide/simulate.md")
+    parser.add_argument(
+        "scene",
+        help="scene file (TOML), or the name of a bundled scene (chain_4, chain_10, chain_20, "
+        "chain_1000, panda_pd, ur5_falling, kinova_swing, solo12_tumble); the format: docs/scenes.md",
+    )
     parser.add_argument(
         "-o", "--output", help="results folder (default: results/<scene name> next to the cwd)"
     )

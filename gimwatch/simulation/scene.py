@@ -26,6 +26,7 @@ from gimwatch.metrics.watch import METRICS
 from gimwatch.model.robots import path_problem
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS as BACKEND_CLASSES
+from gimwatch.simulation.bundled_scenes import missing_scene_hint, resolve_scene
 from gimwatch.simulation.effects import EFFECTS
 from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.simulation.parameters import Parameter
@@ -325,15 +326,21 @@ def parse_scene(
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file (TOML).
+    """Read and validate a scene file (TOML), or a bundled scene named without a path.
+
+    ``load_scene("chain_10")`` reads the scene shipped with gimwatch
+    (``gimwatch/scenes/chain_10.toml``) when no file ``chain_10`` exists in the working folder.
 
     Raises:
         SceneError: Missing or unreadable file, TOML syntax error, or a bad key.
     """
-    path = Path(path)
+    path = resolve_scene(path)
     try:
         if not path.exists():  # also a path through a file (NotADirectoryError)
-            raise SceneError(str(path), "", path_problem(path))
+            problem = path_problem(path)
+            if problem == "no such file":
+                problem += f"; {missing_scene_hint(path)}"
+            raise SceneError(str(path), "", problem)
         if path.is_dir():
             raise SceneError(str(path), "", "is a directory, not a scene file")
         if not path.is_file():  # a FIFO or device could block forever
