@@ -19,8 +19,8 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   DeNOC's operators (:func:`gimwatch.denoc.extreme_eigenvalues`).
 * ``tracker_claim`` — along the paper's own trajectories (the bundled ``chain_{4,10,20}``
   scenes): δ, αδ (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch
-  metric: median cost of one :meth:`~gimwatch.metrics.watch.Watch.sample` and the median / max relative error
-  against κ.
+  metric: median cost of one :meth:`~gimwatch.metrics.watch.Watch.sample` and the median /
+  max relative error against κ.
 * ``tracker_chain_1000`` — the bundled ``chain_1000`` scene (DOP853 on DeNOC) run watching δ alone
   and watching δ and the tracked κ at every sample: wall time of each run (median of runs).
 """
