@@ -23,6 +23,7 @@ LAYERS = {
     "_version": 1,
     "suggest": 1,
     "output": 1,
+    "jit": 1,
     "model": 2,
     "denoc": 3,
     "crosscheck": 4,

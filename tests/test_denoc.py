@@ -104,6 +104,7 @@ def test_denoc_sources_import_no_pinocchio():
         "numpy.typing",
         "scipy.linalg",
         "numba",
+        "gimwatch.jit",  # numba.njit, cached, with a note while compiling
         "yourdfpy",
         "gimwatch.errors",
         "gimwatch.model.urdf_text",

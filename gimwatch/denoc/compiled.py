@@ -23,7 +23,8 @@ Working at O_i rather than at the world origin keeps lever arms local, which mat
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from gimwatch.jit import njit
 
 __all__ = [
     "add_shift_congruence",

@@ -33,9 +33,9 @@ rotational inertia the diagonal needs. Conventions and equations as in :mod:`.co
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from gimwatch.denoc.compiled import add_shift_congruence, cross3
+from gimwatch.jit import njit
 
 __all__ = [
     "configure",

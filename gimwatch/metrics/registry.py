@@ -31,7 +31,6 @@ import numpy as np
 
 from gimwatch.errors import ConditioningError
 from gimwatch.metrics import conditioning
-from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
 
 __all__ = ["METRICS", "GimState", "Metric", "evaluate", "register"]
@@ -214,6 +213,10 @@ class KappaLanczos(Metric):
         self.data = None
 
     def __call__(self, state):
+        # imported here: SciPy's ARPACK and the compiled DeNOC kernels cost ~0.4 s to import,
+        # which the dense path (analyze, the watch without this metric) never pays
+        from gimwatch.metrics.matrix_free import kappa_matrix_free
+
         if self.data is None:  # RNEA/ABA need a Pinocchio Data, even when M comes from DeNOC
             self.data = state.robot.new_data() if state.data is None else state.data
         result = kappa_matrix_free(

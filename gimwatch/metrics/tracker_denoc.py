@@ -15,10 +15,10 @@ See :mod:`gimwatch.metrics.tracker` for the method and its stopping rule.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from gimwatch.denoc import fused
 from gimwatch.errors import ConditioningError
+from gimwatch.jit import njit
 from gimwatch.metrics.tracker_krylov import Workspace, leading
 
 __all__ = ["DenocEnds", "warm_sample"]

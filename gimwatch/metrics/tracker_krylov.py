@@ -24,9 +24,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 
 from gimwatch.denoc import fused
+from gimwatch.jit import njit
 
 __all__ = ["MAX_BASIS", "Workspace", "leading", "leading_python"]
 
