@@ -11,8 +11,8 @@ and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can che
 * :class:`LeanModel` — the O(n) operations (diag M, M·x, M⁻¹·y, forward and inverse
   dynamics) as one compiled call each with preallocated buffers, fixed and floating bases,
   in Pinocchio's coordinate order (:mod:`.fused`); ``DenocModel.lean()`` builds it.
-* :class:`LinearTimeModel` — fixed-base trees, the same recursions compiled with numba
-  (:mod:`.compiled`): O(n) time and memory, for chains of 10^4–10^5 links, with the
+* :class:`LinearTimeModel` — fixed-base trees, one angle per body, on the same compiled
+  kernels (:mod:`.fused`): O(n) time and memory, for chains of 10^4–10^5 links, with the
   matrix-free condition number :func:`extreme_eigenvalues`.
 """
 

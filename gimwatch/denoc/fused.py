@@ -1,11 +1,13 @@
 """The DeNOC recursions fused into one compiled call each, fixed or floating base, no allocation.
 
-:mod:`.compiled` keeps one kernel per recursion (kinematics, body mass matrices, factor,
-solve), each allocating its outputs, and leaves the floating base to the NumPy recursions of
-:mod:`.recursions`. Here every public operation — diag M(q), M·x, M⁻¹·y, forward and inverse
-dynamics — is ONE compiled call that reads q, v, τ in Pinocchio's coordinate order, writes
-into caller-owned buffers and returns, so that a Python caller pays one dispatch per
-operation and nothing else (:class:`gimwatch.denoc.lean.LeanModel` owns the buffers).
+DeNOC's one compiled implementation (numba); :mod:`.recursions` is the NumPy reference,
+written equation by equation. Every public operation — diag M(q), M·x, M⁻¹·y, forward and
+inverse dynamics — is ONE compiled call that reads q, v, τ in the caller's coordinate order
+(given per body by ``index``), writes into caller-owned buffers and returns, so that a Python
+caller pays one dispatch per operation and nothing else. Two wrappers own the buffers:
+:class:`gimwatch.denoc.lean.LeanModel` (Pinocchio's coordinates, fixed or floating base) and
+:class:`gimwatch.denoc.linear.LinearTimeModel` (one angle per body, fixed base, for 10^4–10^5
+links, with a state object per configuration).
 
 Arrays cover the whole tree, root included (body 0). With a fixed base body 0 is the world:
 its acceleration is ``[0; −g]`` (gravity as an upward acceleration of the base) and nothing is
@@ -34,13 +36,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from gimwatch.denoc.compiled import add_shift_congruence, cross3
 from gimwatch.jit import njit
 
 __all__ = [
+    "COM_OFFSET_ROW",
+    "ORIGIN_ROW",
     "configure",
     "factor_shifted",
     "forward_dynamics",
+    "forward_dynamics_factored",
     "gim_diagonal",
     "gim_product",
     "gim_solve",
@@ -49,7 +53,56 @@ __all__ = [
 ]
 
 _ORIGIN, _REACH, _AXIS, _COM, _OMEGA = 0, 1, 2, 3, 4
+#: Rows of the ``vec`` buffer that callers read after the kinematics: origins O_i and the
+#: centre-of-mass offsets d_i = c_i − O_i, both in world axes (m).
+ORIGIN_ROW, COM_OFFSET_ROW = _ORIGIN, _COM
 _U, _C, _B, _RATE, _WRENCH = 0, 1, 2, 3, 4
+
+
+@njit(cache=True, inline="always")
+def cross3(a, b, out):
+    """The cross product a × b of 3-vectors, written into out."""
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True)
+def add_shift_congruence(target, x, r, scratch):
+    """Target += A_ijᵀ X A_ij, with A_ij = [[1, 0], [-r̃, 1]] (r = O_i - O_j); X symmetric.
+
+    Blockwise, with X = [[a, b], [bᵀ, d]]: the top-right block becomes b + r̃ d, the top-left
+    a + r̃ bᵀ - (b + r̃ d) r̃ and the bottom-left its transpose; d is unchanged.
+    """
+    rx, ry, rz = r[0], r[1], r[2]
+    top_right = scratch
+    for c in range(3):
+        d0, d1, d2 = x[3, 3 + c], x[4, 3 + c], x[5, 3 + c]
+        top_right[0, c] = x[0, 3 + c] + (-rz * d1 + ry * d2)
+        top_right[1, c] = x[1, 3 + c] + (rz * d0 - rx * d2)
+        top_right[2, c] = x[2, 3 + c] + (-ry * d0 + rx * d1)
+    for a in range(3):
+        # row a of r̃ bᵀ, with bᵀ = x[3:, :3]
+        for c in range(3):
+            b0, b1, b2 = x[3, c], x[4, c], x[5, c]
+            if a == 0:
+                rb = -rz * b1 + ry * b2
+            elif a == 1:
+                rb = rz * b0 - rx * b2
+            else:
+                rb = -ry * b0 + rx * b1
+            # (top_right r̃)[a, c]
+            t0, t1, t2 = top_right[a, 0], top_right[a, 1], top_right[a, 2]
+            if c == 0:
+                tr = t1 * rz - t2 * ry
+            elif c == 1:
+                tr = -t0 * rz + t2 * rx
+            else:
+                tr = t0 * ry - t1 * rx
+            target[a, c] += x[a, c] + rb - tr
+            target[a, 3 + c] += top_right[a, c]
+            target[3 + c, a] += top_right[a, c]
+            target[3 + a, 3 + c] += x[3 + a, 3 + c]
 
 
 @njit(cache=True)
@@ -620,6 +673,15 @@ def forward_dynamics(
     moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
     _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out)
     return ok
+
+
+@njit(cache=True)
+def forward_dynamics_factored(
+    v, tau, gravity, index, geometry, floating, rot, vec, block, six, scal, root, out
+):
+    """:func:`forward_dynamics` at the q of the last :func:`configure` (factor kept)."""
+    moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
+    _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out)
 
 
 @njit(cache=True)

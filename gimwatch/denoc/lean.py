@@ -149,11 +149,15 @@ class LeanModel:
         """
         return self._index, self._geometry, self.floating
 
-    def new_workspace(self) -> tuple:
-        """Fresh buffers (rot, vec, block, six, scal, root) shaped like this model's own."""
+    def new_workspace(self, *, zeroed: bool = True) -> tuple:
+        """Fresh buffers (rot, vec, block, six, scal, root) shaped like this model's own.
+
+        ``zeroed=False`` leaves them uninitialised, for callers whose first call writes
+        every entry later read (the kinematics, then the factor).
+        """
+        make = np.zeros_like if zeroed else np.empty_like
         return tuple(
-            np.zeros_like(a)
-            for a in (self._rot, self._vec, self._block, self._six, self._scal, self._root)
+            make(a) for a in (self._rot, self._vec, self._block, self._six, self._scal, self._root)
         )
 
     def gim_product(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:

@@ -169,7 +169,7 @@ class DenocModel:
         state = self.state(q)
         velocity = self.to_internal("v", v)
         kinetic = 0.5 * float(velocity @ state.matvec(velocity))
-        centres = state.origin + state.com_offset
+        centres = state.centres_of_mass
         potential = -float(self.tree.mass[1:] @ (centres @ _vector("gravity", gravity, 3)))
         return kinetic, potential
 
