@@ -2,7 +2,7 @@
 
 Importing gimwatch does no work: no robot is loaded, nothing is written, and no submodule is
 imported until one of its names is first used (PEP 562). ``gimwatch.load_robot`` imports
-``gimwatch.model.robots`` on first access; every name of :data:`__all__` is reachable this
+``gimwatch.model.robots`` on first access; every name of `__all__` is reachable this
 way, and ``from gimwatch import X`` works as usual.
 """
 
@@ -63,7 +63,8 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     )
     from gimwatch.simulation.results_folder import summarize, write_simulation
     from gimwatch.simulation.scene import Scene, load_scene, parse_scene
-    from gimwatch.simulation.simulate import Simulation, Trajectory, run_scene
+    from gimwatch.simulation.simulate import Simulation, run_scene
+    from gimwatch.simulation.trajectory import Trajectory
     from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
     from gimwatch.stress.reference_tree import TreeReference
     from gimwatch.stress.suite import StressResult, run_stress
@@ -98,7 +99,7 @@ _EXPORTS: dict[str, str] = {
     "SimulationError": "gimwatch.errors",
     "StressResult": "gimwatch.stress.suite",
     "SurveyResult": "gimwatch.survey.records",
-    "Trajectory": "gimwatch.simulation.simulate",
+    "Trajectory": "gimwatch.simulation.trajectory",
     "TreeReference": "gimwatch.stress.reference_tree",
     "URDFError": "gimwatch.errors",
     "URDFWarning": "gimwatch.errors",

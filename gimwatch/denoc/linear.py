@@ -35,7 +35,7 @@ class LinearTimeModel:
     :class:`~gimwatch.denoc.lean.LeanModel`); this class gives them one coordinate per body,
     an angle for revolute and continuous joints, and a state object per configuration.
 
-    Example:
+    Examples:
         >>> from gimwatch.model.chains import chain_spec
         >>> from gimwatch.denoc import LinearTimeModel, chain_body_tree
         >>> model = LinearTimeModel(chain_body_tree(chain_spec(4)))

@@ -178,7 +178,7 @@ class ScaledDiagonalRatio:
     costs only the diagonal ratio. Calibrating again is refused so that α cannot be tuned
     after the fact.
 
-    Example:
+    Examples:
         >>> import numpy as np
         >>> estimator = ScaledDiagonalRatio()
         >>> estimator.calibrate(np.diag([4.0, 1.0]))

@@ -39,7 +39,6 @@ __all__ = [
     "DEFAULT_METRICS",
     "METRICS",
     "OPERATOR_METRICS",
-    "Alarm",
     "EstimatorQuality",
     "Watch",
     "estimator_quality",

@@ -51,7 +51,6 @@ __all__ = [
     "RTOL_FLOOR",
     "STATUSES",
     "Simulation",
-    "Trajectory",
     "load_scene_robot",
     "run_scene",
 ]
@@ -218,7 +217,7 @@ def run_scene(
 ) -> Trajectory:
     """Build and run a scene (see :class:`Simulation`), optionally under a Python torque law.
 
-    Example:
+    Examples:
         >>> import numpy as np
         >>> from gimwatch import parse_scene, run_scene
         >>> scene = parse_scene({"robot": "chain:2", "duration": 0.1, "sample": 0.05})
