@@ -4,7 +4,7 @@ Shah & Saha (2013), Sec. 4: chains of identical slender rods (2.2 kg, 1 m), join
 z, released straight and horizontal at rest under gravity in the plane of motion. Each
 chain is simulated with DOP853 (rtol = atol = 1e-10) while the watch records κ₂, δ, αδ
 (α from t = 0 only, Eq. 15), both pivot ratios, the spectrum and diag M at every sample.
-:func:`run_demo` writes one results folder per chain, the figures in the spirit of the
+`run_demo` writes one results folder per chain, the figures in the spirit of the
 paper's Figs. 2–5 and ``report.md`` with the numbers.
 """
 
@@ -273,7 +273,7 @@ def run_demo(
 ) -> Path:
     """Simulate the paper's chains, write figures, results and ``report.md``; return its path.
 
-    The results folder is replaced whole (:mod:`gimwatch.output.folders`). A chain whose run
+    The results folder is replaced whole (`gimwatch.output.folders`). A chain whose run
     ends early (Ctrl-C: status ``interrupted``) is written as far as it went, the later
     chains are not run, and the report says so.
 

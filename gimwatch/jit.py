@@ -32,7 +32,7 @@ LOGGER = logging.getLogger("gimwatch")
 
 
 class CompileNote(event.Listener):
-    """Prints :data:`COMPILE_NOTE` on the first compilation of a gimwatch kernel."""
+    """Prints `COMPILE_NOTE` on the first compilation of a gimwatch kernel."""
 
     def __init__(self) -> None:
         self.noted = False

@@ -1,13 +1,13 @@
 """What accuracy costs in time: the sections of ``gimwatch bench`` and the run that ties them.
 
 Each section is a module of this package with ``run(context) -> SectionResult``; the
-:data:`SECTIONS` registry names them. A section whose module cannot be imported (an optional
+`SECTIONS` registry names them. A section whose module cannot be imported (an optional
 dependency missing) is reported as skipped by ``all`` and refused when asked for by name.
 
 Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder's
 staging copy as soon as it finishes; ``report.md`` is then written from the sections that
 finished, headed by versions, date, CPU and thread settings, and the folder is swapped into
-place (:mod:`gimwatch.output.folders`), even when the run was interrupted: it keeps what it
+place (`gimwatch.output.folders`), even when the run was interrupted: it keeps what it
 measured. Files of the previous folder that this run does not rewrite are kept (other
 sections' tables, the folder's README).
 """

@@ -2,22 +2,22 @@
 
 The paper's swinging 10- and 20-link chains (``gimwatch/scenes/chain_10.toml``, ``chain_20.toml``:
 straight and horizontal at rest, gravity −y in the plane of motion, 5 s) are run with every
-integrator of :class:`gimwatch.simulation.simulate.Simulation` and the ``aba`` backend, the δ watch
-on
+integrator of [`Simulation`][gimwatch.simulation.simulate.Simulation]
+and the ``aba`` backend, the δ watch on
 (``diagonal_ratio`` at the scene's samples, every 0.01 s), energy evaluated at the samples:
 
 * SciPy's DOP853, RK45, Radau, LSODA at rtol = atol = 1e-3 … 1e-12;
 * fixed-step RK4 and semi-implicit Euler at dt = 1e-2 … 1e-5;
 * MuJoCo's RK4 and (semi-implicit) Euler at the same steps, on the same URDF
-  (:mod:`gimwatch.bench.mujoco_peer`; its mass matrix is checked against CRBA first).
+  (`gimwatch.bench.mujoco_peer`; its mass matrix is checked against CRBA first).
 
 Each run reports its final-state error max |q(T) − q_ref(T)| (rad) and velocity error
 against a tight reference — DOP853 at rtol = atol = 1e-14 (SciPy raises rtol to 2.2e-14),
 whose own uncertainty is estimated by its distance to DOP853 at 1e-13 — and the relative
 energy drift, wall time (integration loop, samples included; median of 3 runs under
 0.5 s), dynamics evaluations and steps. Runs are capped: a fixed-step run predicted
-(from the previous step size) to exceed :data:`CAP_S` is skipped, an adaptive run is
-aborted at :data:`CAP_S` and the tighter tolerances of that method are skipped; the rows
+(from the previous step size) to exceed `CAP_S` is skipped, an adaptive run is
+aborted at `CAP_S` and the tighter tolerances of that method are skipped; the rows
 say so.
 """
 

@@ -14,7 +14,7 @@ interleaved so that a busy moment on the machine hits them alike; medians are re
   ``gimwatch simulate`` of the 10-link chain scene with κ and δ watched.
 
 The section's summary records which gimwatch modules the measured processes import and a
-digest of each (:mod:`gimwatch.bench.freshness`): ``tests/test_docs.py`` fails when the code
+digest of each (`gimwatch.bench.freshness`): ``tests/test_docs.py`` fails when the code
 changed since, so the times quoted in the docs are never older than the code.
 
 Targets: ``import gimwatch`` at most 0.3 s more than ``import pinocchio``; ``gimwatch analyze

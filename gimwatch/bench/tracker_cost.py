@@ -11,15 +11,15 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   ``eigvalsh`` of CRBA's M and λmin from ``eigvalsh`` of Pinocchio's ``computeMinverse``
   (each the largest eigenvalue of its matrix, so float64 resolves it even at κ ~ 1e11, where
   the plain dense κ = eig(M) has lost its digits — its own error is listed). Methods: the
-  tracker (:class:`gimwatch.metrics.tracker.KappaTracker` on DeNOC's lean products,
-  tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's previous
-  matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the previous
-  eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
+  tracker ([`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on
+  DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's
+  previous matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the
+  previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
   means nothing (eps·κ ≈ 1e-3): the tracker is compared with cold-start Lanczos at 1e-10 on
-  DeNOC's operators (:func:`gimwatch.denoc.extreme_eigenvalues`).
+  DeNOC's operators ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]).
 * ``tracker_claim`` — along the paper's own trajectories (the bundled ``chain_{4,10,20}``
   scenes): δ, αδ (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch
-  metric: median cost of one :meth:`~gimwatch.metrics.watch.Watch.sample` and the median /
+  metric: median cost of one [`sample`][gimwatch.metrics.watch.Watch.sample] and the median /
   max relative error against κ.
 * ``tracker_chain_1000`` — the bundled ``chain_1000`` scene (DOP853 on DeNOC) run watching δ alone
   and watching δ and the tracked κ at every sample: wall time of each run (median of runs).

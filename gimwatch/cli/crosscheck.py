@@ -48,7 +48,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_output_arguments(parser, what="robots")
 
 
-#: ``--csv`` columns, one row per robot (the fields of :class:`CrossCheckResult`).
+#: ``--csv`` columns, one row per robot (the fields of
+#: [`CrossCheckResult`][gimwatch.crosscheck.CrossCheckResult]).
 CSV_COLUMNS = tuple(CrossCheckResult.__dataclass_fields__)
 
 

@@ -1,13 +1,13 @@
 """The DeNOC recursions fused into one compiled call each, fixed or floating base, no allocation.
 
-DeNOC's one compiled implementation (numba); :mod:`.recursions` is the NumPy reference,
+DeNOC's one compiled implementation (numba); `.recursions` is the NumPy reference,
 written equation by equation. Every public operation — diag M(q), M·x, M⁻¹·y, forward and
 inverse dynamics — is ONE compiled call that reads q, v, τ in the caller's coordinate order
 (given per body by ``index``), writes into caller-owned buffers and returns, so that a Python
 caller pays one dispatch per operation and nothing else. Two wrappers own the buffers:
-:class:`gimwatch.denoc.lean.LeanModel` (Pinocchio's coordinates, fixed or floating base) and
-:class:`gimwatch.denoc.linear.LinearTimeModel` (one angle per body, fixed base, for 10^4–10^5
-links, with a state object per configuration).
+[`gimwatch.denoc.lean.LeanModel`][gimwatch.denoc.LeanModel] (Pinocchio's coordinates, fixed or
+floating base) and [`gimwatch.denoc.linear.LinearTimeModel`][gimwatch.denoc.LinearTimeModel] (one
+angle per body, fixed base, for 10^4–10^5 links, with a state object per configuration).
 
 Arrays cover the whole tree, root included (body 0). With a fixed base body 0 is the world:
 its acceleration is ``[0; −g]`` (gravity as an upward acceleration of the base) and nothing is
@@ -15,7 +15,7 @@ passed to it. With a floating base body 0 moves on Pinocchio's free-flyer: q = (
 qy, qz, qw), v = (local linear, local angular), and its six columns are
 ``P = [[0, R], [R, 0]]`` (local ``[v; ω]`` to the world twist ``[ω; v_O]``).
 
-Packed inputs (built once by :class:`~gimwatch.denoc.lean.LeanModel`):
+Packed inputs (built once by [`LeanModel`][gimwatch.denoc.LeanModel]):
 
 * ``index`` (N, 5) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic),
   index of the body's first q entry, index of its v entry (for the root: of the first of six),
@@ -28,7 +28,7 @@ e_i, centre-of-mass offset d_i, angular velocity ω_i; ``six`` (N, 5, 6) = U_i, 
 c_i, bias wrench b_i, twist rate, wrench; ``block`` (N, 2, 6, 6) = M_i, composite /
 articulated M̃_i; ``scal`` (N, 2) = pivot D_i, u_i; ``root`` (7, 6) = the free-flyer's 6×6
 UDUᵀ factor (rows 0–5 U, row 6 D); ``comp`` (N, 10) = the composite mass, first moment and
-rotational inertia the diagonal needs. Conventions and equations as in :mod:`.compiled`
+rotational inertia the diagonal needs. Conventions and equations as in `.compiled`
 (Shah & Saha 2013, Eqs. 11–13; Saha's DeNOC; Featherstone's articulated-body algorithm).
 """
 
@@ -287,7 +287,7 @@ def _udut6(matrix, root):
 
 @njit(cache=True)
 def _solve6(root, rhs, out):
-    """Out = (U D Uᵀ)⁻¹ rhs with the factor of :func:`_udut6`."""
+    """Out = (U D Uᵀ)⁻¹ rhs with the factor of `_udut6`."""
     z = np.empty(6)
     for i in range(5, -1, -1):
         acc = rhs[i]
@@ -637,15 +637,15 @@ def configure(q, index, geometry, floating, rot, vec, block, six, scal, root):
 
 @njit(cache=True)
 def kinematics(q, index, geometry, floating, rot, vec, block):
-    """Poses and body mass matrices at q: all that :func:`gim_product` reads."""
+    """Poses and body mass matrices at q: all that `gim_product` reads."""
     _kinematics(q, index, geometry, floating, rot, vec, block)
 
 
 @njit(cache=True)
 def factor_shifted(shift, index, floating, rot, vec, block, six, scal, root):
-    """The articulated factor of M(q) − shift·1 after :func:`kinematics`, for :func:`gim_solve`.
+    """The articulated factor of M(q) − shift·1 after `kinematics`, for `gim_solve`.
 
-    :func:`gim_solve` then gives (M − shift·1)⁻¹ y. Returns whether every pivot is positive,
+    `gim_solve` then gives (M − shift·1)⁻¹ y. Returns whether every pivot is positive,
     i.e. (Sylvester's law of inertia) whether shift < λmin(M).
     """
     return _factor(index, floating, rot, vec, block, six, scal, root, shift)
@@ -679,7 +679,7 @@ def forward_dynamics(
 def forward_dynamics_factored(
     v, tau, gravity, index, geometry, floating, rot, vec, block, six, scal, root, out
 ):
-    """:func:`forward_dynamics` at the q of the last :func:`configure` (factor kept)."""
+    """`forward_dynamics` at the q of the last `configure` (factor kept)."""
     moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
     _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out)
 

@@ -1,9 +1,10 @@
 """O(n) dynamics of fixed-base trees without forming M, one angle per body, on DeNOC's kernels.
 
-:class:`LinearTimeModel` wraps a fixed-base :class:`~gimwatch.denoc.tree.BodyTree`;
-:meth:`LinearTimeModel.at` gives the :class:`ConfigurationState` at one configuration with
-diag M, M·x, M⁻¹·x, the UDUᵀ pivots, inverse and forward dynamics, each O(n) in time and
-memory. :func:`extreme_eigenvalues` turns M·x and M⁻¹·x into κ₂ by Lanczos.
+[`LinearTimeModel`][gimwatch.denoc.LinearTimeModel] wraps a fixed-base
+[`BodyTree`][gimwatch.denoc.BodyTree]; [`LinearTimeModel.at`][gimwatch.denoc.LinearTimeModel.at]
+gives the [`ConfigurationState`][gimwatch.denoc.ConfigurationState] at one configuration with diag
+M, M·x, M⁻¹·x, the UDUᵀ pivots, inverse and forward dynamics, each O(n) in time and memory.
+[`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues] turns M·x and M⁻¹·x into κ₂ by Lanczos.
 
 Coordinates are the tree's body order (parents first), one per body: an angle for revolute
 and continuous joints, a displacement for prismatic ones. Pinocchio's Data for an n-joint
@@ -31,8 +32,8 @@ _REVOLUTE, _CONTINUOUS = 1, 2
 class LinearTimeModel:
     """O(n) dynamics of a fixed-base tree of 1-DoF joints.
 
-    The recursions are DeNOC's compiled kernels (:mod:`.fused`, the same that serve
-    :class:`~gimwatch.denoc.lean.LeanModel`); this class gives them one coordinate per body,
+    The recursions are DeNOC's compiled kernels (`.fused`, the same that serve
+    [`LeanModel`][gimwatch.denoc.LeanModel]); this class gives them one coordinate per body,
     an angle for revolute and continuous joints, and a state object per configuration.
 
     Examples:
@@ -215,9 +216,9 @@ class MatrixFreeKappa:
     """κ₂ of M(q) from Lanczos on x ↦ M x and x ↦ M⁻¹ x (M never formed).
 
     The one record of every matrix-free κ in gimwatch: DeNOC's plain Lanczos
-    (:func:`extreme_eigenvalues`) and ARPACK on Pinocchio's RNEA/ABA
-    (:func:`gimwatch.metrics.matrix_free.kappa_matrix_free`). Ritz values approach the
-    extreme eigenvalues from inside the spectrum, so ``lambda_max`` and ``1 / lambda_min``
+    ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]) and ARPACK on Pinocchio's RNEA/ABA
+    ([`kappa_matrix_free`][gimwatch.metrics.matrix_free.kappa_matrix_free]). Ritz values approach
+    the extreme eigenvalues from inside the spectrum, so ``lambda_max`` and ``1 / lambda_min``
     are lower bounds and ``kappa`` a lower bound of κ₂ that converges to it.
 
     Attributes:

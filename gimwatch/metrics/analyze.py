@@ -1,9 +1,9 @@
 """``analyze``: conditioning of a robot's GIM at configurations, on the path that fits it.
 
 The dense path forms M with Pinocchio's CRBA and gives every metric and the whole spectrum;
-the O(n) path (:mod:`gimwatch.metrics.linear_analysis`) never forms M nor builds a Pinocchio
-Data, whose memory grows as nv³. :func:`choose_path` picks it: above
-:data:`~gimwatch.model.robots.DATA_NV_LIMIT` coordinates a fixed-base generated chain goes
+the O(n) path (`gimwatch.metrics.linear_analysis`) never forms M nor builds a Pinocchio
+Data, whose memory grows as nv³. `choose_path` picks it: above
+`DATA_NV_LIMIT` coordinates a fixed-base generated chain goes
 the O(n) way, everything else the dense way, unless the caller asks for one.
 """
 
@@ -30,7 +30,7 @@ from gimwatch.model.robots import (
 
 __all__ = ["LINEAR_NV_LIMIT", "PATHS", "Analysis", "analyze", "choose_path"]
 
-#: ``backend`` values: ``auto`` lets :func:`choose_path` decide.
+#: ``backend`` values: ``auto`` lets `choose_path` decide.
 PATHS = ("auto", "crba", "denoc")
 #: The O(n) path's largest chain: diag, pivots and κ stay O(n) (about 1 kB per link).
 LINEAR_NV_LIMIT = 200_000
@@ -41,7 +41,7 @@ class Analysis:
     """The analyses of one robot, and the path that made them.
 
     Attributes:
-        results: One :class:`GimAnalysis` per configuration.
+        results: One [`GimAnalysis`][gimwatch.metrics.dense_analysis.GimAnalysis] per configuration.
         path: ``"crba"`` (dense M) or ``"denoc"`` (O(n), no M).
         chosen: True when ``auto`` chose the path (the caller may want to say why).
         placeholder_limits: Joints whose placeholder limits (|limit| >= 1e3 or none) random
@@ -145,12 +145,12 @@ def analyze(
         random: Analyse this many random configurations within the joint limits instead.
         seed: Seed of the random configurations (and of Lanczos on the O(n) path).
         floating: Add a free-flyer base (dense path only).
-        backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see :func:`choose_path`.
+        backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see `choose_path`.
         metrics: On the O(n) path, a subset of its metrics; the dense path computes all.
         key: The name of ``q`` in error messages (``--q`` for the CLI).
 
     Returns:
-        The :class:`Analysis`: the results and the path taken.
+        The `Analysis`: the results and the path taken.
     """
     path = choose_path(spec, floating=floating, backend=backend)
     if metrics is not None and path != "denoc":

@@ -1,15 +1,15 @@
 """The κ tracker on DeNOC's compiled model: one compiled call per warm sample, shift-invert λmin.
 
-:class:`DenocEnds` holds the tracker's own DeNOC buffers (the LeanModel it was given keeps
-its configuration) and the state carried from sample to sample: each end's Ritz block, the
-last λmin and its last relative change. A warm sample is ONE compiled call,
-:func:`warm_sample`: kinematics at q (Shah & Saha's DeNOC, :mod:`gimwatch.denoc.fused`),
-Lanczos on M·x for λmax, the articulated factor of M − σ·1 with σ = λmin(previous)·(1 − s)
-(refactored with s × 100 while a pivot is not positive — Sylvester's law of inertia: then
-λmin ≤ σ — up to s = 1, the plain M⁻¹), and Lanczos on (M − σ·1)⁻¹ for λmin = σ + 1/θ.
+[`DenocEnds`][gimwatch.metrics.tracker_denoc.DenocEnds] holds the tracker's own DeNOC buffers (the
+LeanModel it was given keeps its configuration) and the state carried from sample to sample: each
+end's Ritz block, the last λmin and its last relative change. A warm sample is ONE compiled call,
+[`warm_sample`][gimwatch.metrics.tracker_denoc.warm_sample]: kinematics at q (Shah & Saha's DeNOC,
+`gimwatch.denoc.fused`), Lanczos on M·x for λmax, the articulated factor of M − σ·1 with σ =
+λmin(previous)·(1 − s) (refactored with s × 100 while a pivot is not positive — Sylvester's law of
+inertia: then λmin ≤ σ — up to s = 1, the plain M⁻¹), and Lanczos on (M − σ·1)⁻¹ for λmin = σ + 1/θ.
 Cold starts (the first sample, and the detected failures of a warm one) run the same
 compiled pieces from Python: λmin first to 1e-7 on M⁻¹, then shift-invert to the tolerance.
-See :mod:`gimwatch.metrics.tracker` for the method and its stopping rule.
+See [`gimwatch.metrics.tracker`][gimwatch.metrics.tracker] for the method and its stopping rule.
 """
 
 from __future__ import annotations
@@ -52,11 +52,12 @@ def _factor_with_margin(low, s, model):
 def warm_sample(
     q, geometry, model, starts_max, starts_min, probes, state, params, V, AV, H, vectors, stats
 ):
-    """One warm sample in one call (see :meth:`DenocEnds.sample` for ``stats``).
+    """One warm sample in one call (see `DenocEnds.sample` for ``stats``).
 
     Args:
         q: Configuration (Pinocchio's order).
-        geometry: The packed tree (:meth:`~gimwatch.denoc.lean.LeanModel.compiled_model_arguments`).
+        geometry: The packed tree
+            ([`compiled_model_arguments`][gimwatch.denoc.LeanModel.compiled_model_arguments]).
         model: (index, floating, rot, vec, block, six, scal, root): the tracker's buffers.
         starts_max: The λmax end's Ritz block (rows, leading last) and a probe row; the block
             is overwritten with the new Ritz vectors.
@@ -65,12 +66,13 @@ def warm_sample(
         state: [λmax, λmin, last relative change of λmin, probes used], updated in place when
             both ends succeed.
         params: [rtol, warm product budget, jump].
-        V: Krylov workspace (:class:`~gimwatch.metrics.tracker_krylov.Workspace`), with AV,
+        V: Krylov workspace ([`Workspace`][gimwatch.metrics.tracker_krylov.Workspace]), with AV,
             H and vectors.
         AV: See V.
         H: See V.
         vectors: See V.
-        stats: Receives the results (:meth:`DenocEnds.sample`).
+        stats: Receives the results
+            ([`DenocEnds.sample`][gimwatch.metrics.tracker_denoc.DenocEnds.sample]).
     """
     rtol, budget, jump = params[0], int(params[1]), params[2]
     used = int(state[3])
@@ -110,7 +112,7 @@ def warm_sample(
 
 
 class DenocEnds:
-    """Both ends of the κ tracker on a :class:`~gimwatch.denoc.lean.LeanModel`.
+    """Both ends of the κ tracker on a [`LeanModel`][gimwatch.denoc.LeanModel].
 
     Args:
         lean: DeNOC's compiled model.
@@ -170,7 +172,7 @@ class DenocEnds:
     def _cold_low(self, tracker) -> tuple[float, float, bool, int, int]:
         """λmin from a cold start, by shift-invert with a shift refined round after round.
 
-        Round k runs :data:`_ROUND` products of Lanczos on (M − σ·1)⁻¹ from the current Ritz
+        Round k runs `_ROUND` products of Lanczos on (M − σ·1)⁻¹ from the current Ritz
         block and a probe; its Ritz value gives λ = σ + 1/θ ≥ λmin (θ ≤ the largest
         eigenvalue of the operator). The next shift is λ − 0.1 (λ − σ); when a pivot of
         M − σ·1 is not positive, λmin < σ (Sylvester), and σ is halved back towards the last
@@ -206,9 +208,9 @@ class DenocEnds:
     def sample(self, q: np.ndarray, tracker) -> list:
         """[(λmax, products, fallback, estimate), (λmin, …), factorizations] at q.
 
-        ``stats`` after :func:`warm_sample`: λmax, its estimate, converged, products (0–3);
-        the same for λmin (4–7); σ, factorizations, M positive definite (8–10); a fallback
-        is needed (11), for λmax (12), for λmin (13).
+        ``stats`` after [`warm_sample`][gimwatch.metrics.tracker_denoc.warm_sample]: λmax, its
+        estimate, converged, products (0–3); the same for λmin (4–7); σ, factorizations, M positive
+        definite (8–10); a fallback is needed (11), for λmax (12), for λmin (13).
         """
         if not self.sampled:
             return self._start(q, tracker)

@@ -1,4 +1,4 @@
-"""Turn a robot specification into a :class:`Robot` (a Pinocchio model plus what it came from).
+"""Turn a robot specification into a `Robot` (a Pinocchio model plus what it came from).
 
 A specification is one of:
 
@@ -12,8 +12,9 @@ DeNOC reads URDF only: an MJCF robot has ``urdf_xml == ""`` and its text in ``mj
 ``gimwatch crosscheck`` then compares Pinocchio with MuJoCo (docs/robots.md).
 
 The base is fixed unless ``floating=True``, which adds Pinocchio's free-flyer root joint.
-No :class:`pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
-nv = 300), so callers ask for it with :meth:`Robot.new_data` only when they need it.
+No `pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
+nv = 300), so callers ask for it with [`Robot.new_data`][gimwatch.model.robots.Robot.new_data] only
+when they need it.
 """
 
 from __future__ import annotations
@@ -132,7 +133,7 @@ class Robot:
         return tuple(self.model.names[1:])
 
     def new_data(self) -> pin.Data:
-        """A fresh :class:`pinocchio.Data`; refuses models whose Data would not fit in memory."""
+        """A fresh `pinocchio.Data`; refuses models whose Data would not fit in memory."""
         if self.nv > DATA_NV_LIMIT:
             raise _too_large(self.spec, self.nv)
         return self.model.createData()
@@ -247,7 +248,7 @@ def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> 
 
 
 def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
-    """The :class:`ChainSpec` of a ``chain:N`` specification, or None for other specs."""
+    """The `ChainSpec` of a ``chain:N`` specification, or None for other specs."""
     match = _CHAIN_SPEC.match(str(spec))
     if not match:
         return None
@@ -268,7 +269,7 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
             building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
 
     Returns:
-        The loaded :class:`Robot`.
+        The loaded [`Robot`][gimwatch.model.robots.Robot].
 
     Raises:
         RobotError: The spec names nothing loadable, or the model has no degree of freedom.
@@ -316,7 +317,7 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
 
 
 def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
-    """A :class:`Robot` for a generated chain of any rods (no Pinocchio Data is built).
+    """A `Robot` for a generated chain of any rods (no Pinocchio Data is built).
 
     Raises:
         RobotError: The chain is deeper than Pinocchio's URDF parser can read.
@@ -342,7 +343,7 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
     """Check that ``q`` is a finite real vector of length nq and return it as an array.
 
     Each unit block (a continuous joint's (cos θ, sin θ), a quaternion) must have norm 1
-    within :data:`UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
+    within `UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
     the joint (a zero rotation matrix) and giving a wrong M(q).
     """
     try:

@@ -1,6 +1,6 @@
 """Configurations drawn at random within a robot's joint limits, and the limits' placeholders.
 
-A joint limit of |limit| >= :data:`PLACEHOLDER_LIMIT` (or infinite) is a URDF writer's way of
+A joint limit of |limit| >= `PLACEHOLDER_LIMIT` (or infinite) is a URDF writer's way of
 saying "unlimited"; such coordinates are drawn in ±π rad (angles) or ±1 m (translations).
 Quaternions and the unit complex numbers of continuous joints are drawn uniformly on their
 sphere.
@@ -61,9 +61,9 @@ def _is_real_limit(limit: np.ndarray) -> np.ndarray:
 def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
     """Joints with a coordinate whose limit is a placeholder (|limit| >= 1e3 or infinite).
 
-    :func:`random_configurations` draws those coordinates in ±π rad (angles) or ±1 m
-    (translations, the free-flyer's position included) instead. Continuous joints and
-    quaternions have no limit to read and are not listed.
+    [`random_configurations`][gimwatch.model.robots.random_configurations] draws those coordinates
+    in ±π rad (angles) or ±1 m (translations, the free-flyer's position included) instead.
+    Continuous joints and quaternions have no limit to read and are not listed.
     """
     model = robot.model
     lower, upper = np.array(model.lowerPositionLimit), np.array(model.upperPositionLimit)
@@ -103,8 +103,8 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     """Configurations drawn uniformly within the joint limits, shape ``(count, nq)``.
 
     Unbounded coordinates, and those whose limit is a placeholder (|limit| >= 1e3, see
-    :func:`placeholder_limit_joints`), are drawn in ±π rad (angles) or ±1 m (translations);
-    quaternions
+    [`placeholder_limit_joints`][gimwatch.model.robots.placeholder_limit_joints]), are drawn in ±π
+    rad (angles) or ±1 m (translations); quaternions
     and the unit complex numbers of continuous joints are drawn uniformly on their sphere.
 
     Args:

@@ -1,8 +1,8 @@
 """Checks on URDF text made before any parser builds a model from it.
 
 Pinocchio's parser (urdfdom) and yourdfpy both trust their input; this module turns the
-common ways a URDF can be broken into one-line :class:`~gimwatch.errors.URDFError` messages that
-name the file and the element. It imports no dynamics library, so DeNOC can use it too.
+common ways a URDF can be broken into one-line [`URDFError`][gimwatch.errors.URDFError] messages
+that name the file and the element. It imports no dynamics library, so DeNOC can use it too.
 """
 
 from __future__ import annotations
@@ -90,7 +90,7 @@ def parse_urdf_xml(xml: str, source: str) -> ET.Element:
 def check_urdf(xml: str, source: str) -> ET.Element:
     """Check the structure of URDF text and return its ``<robot>`` element.
 
-    Then every value urdfdom reads is checked (see :mod:`gimwatch.model.urdf_values`).
+    Then every value urdfdom reads is checked (see `gimwatch.model.urdf_values`).
 
     Raises:
         URDFError: The text is not well-formed XML, not a URDF, its links and joints do
@@ -163,8 +163,9 @@ def check_urdf(xml: str, source: str) -> ET.Element:
 def _check_mimics(root: ET.Element, source: str) -> None:
     """A mimic joint follows another moving joint, not itself, and not in a cycle.
 
-    A mimic naming a joint the file does not have is a :class:`URDFWarning` (real robots
-    ship such files when a hand is cut from its arm); Pinocchio then moves the joint freely.
+    A mimic naming a joint the file does not have is a [`URDFWarning`][gimwatch.errors.URDFWarning]
+    (real robots ship such files when a hand is cut from its arm); Pinocchio then moves the joint
+    freely.
     """
     kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
     follows: dict[str, str] = {}

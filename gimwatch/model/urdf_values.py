@@ -4,7 +4,7 @@ urdfdom (Pinocchio's parser) prints its complaints to stderr and, for several of
 builds a model from what it could read: a mass of ``nan`` or ``abc`` silently becomes a
 massless body, a zero joint axis a joint that moves nothing, a negative mass a GIM of
 -1e62. This module reads every value urdfdom would read and raises a one-line
-:class:`~gimwatch.errors.URDFError` naming the file, the link or joint, and the value.
+[`URDFError`][gimwatch.errors.URDFError] naming the file, the link or joint, and the value.
 
 What real robots do is the yardstick (measured on the 71 URDFs of example-robot-data):
 
@@ -13,7 +13,7 @@ What real robots do is the yardstick (measured on the 71 URDFs of example-robot-
   INERTIA_RTOL * largest moment)`` are errors;
 * principal moments that violate the triangle inequality (a + b >= c, required of any
   mass distribution) appear in 16 robots (ANYmal, Go1, Allegro, ...): Pinocchio computes a
-  positive definite GIM from them, so they are a :class:`~gimwatch.errors.URDFWarning`;
+  positive definite GIM from them, so they are a [`URDFWarning`][gimwatch.errors.URDFWarning];
 * zero masses and zero inertias are common (frames, sensors) and left alone; a moving
   joint that carries no mass at all is reported when the GIM is computed (it is singular).
 
@@ -208,7 +208,7 @@ def check_principal_moments(moments: np.ndarray, *, source: str, where: str) -> 
 
 
 def warn_doubtful_inertias(source: str, names: list[str], *, kind: str, stacklevel: int) -> None:
-    """Issue one :class:`~gimwatch.errors.URDFWarning` naming the doubtful bodies.
+    """Issue one [`URDFWarning`][gimwatch.errors.URDFWarning] naming the doubtful bodies.
 
     ``names`` are the links or bodies (``kind``) whose principal moments of inertia violate
     the triangle inequality; nothing is issued when there are none.

@@ -61,7 +61,7 @@ def _series(ax, t, values, labels, *, plot=None, style="-"):
 def plot_eigenvalues(t: npt.ArrayLike, eigenvalues: npt.ArrayLike, *, ax=None):
     """λ_i(M) over time (Fig. 2a), largest first in the legend, log scale.
 
-    More than :data:`MAX_LINES` eigenvalues are drawn as their envelope plus λmax, the
+    More than `MAX_LINES` eigenvalues are drawn as their envelope plus λmax, the
     middle one and λmin.
     """
     ax = _axes(ax)
@@ -200,7 +200,7 @@ def plot_joint_angles(t: npt.ArrayLike, q: npt.ArrayLike, *, names=None, units=N
         q: Joint coordinates, shape (K, nq).
         names: Coordinate names (default q1, q2, ...).
         units: Unit of each coordinate, "rad", "m" or "-" (default all "rad");
-            :func:`joint_coordinate_units` gives both from a Pinocchio model.
+            `joint_coordinate_units` gives both from a Pinocchio model.
         ax: Axes to draw on (a new figure's when None).
     """
     ax = _axes(ax)

@@ -1,15 +1,15 @@
 """Results folders that never destroy what gimwatch did not write.
 
-A results folder holds a marker file, :data:`MARKER`, naming the command that wrote it and
-the entries it wrote. :class:`ResultsFolder` writes one:
+A results folder holds a marker file, `MARKER`, naming the command that wrote it and
+the entries it wrote. `ResultsFolder` writes one:
 
 1. the target is checked: absent, empty, or a folder holding the marker; anything else (a
    folder of the user's files, a regular file, a device, a FIFO) is refused with an
-   :class:`~gimwatch.errors.OutputError`, before any work;
+   [`OutputError`][gimwatch.errors.OutputError], before any work;
 2. a lock (``fcntl.flock`` on ``.NAME.gimwatch-lock`` beside the folder) makes a second
    writer of the same folder refuse at once instead of mixing results;
 3. the files are written into a staging folder beside the target (``.NAME.gimwatch-staging-*``);
-4. :meth:`ResultsFolder.commit` writes the marker, links into the staging folder the entries
+4. `ResultsFolder.commit` writes the marker, links into the staging folder the entries
    of the previous folder that gimwatch did not write (the user's notes, another command's
    sub-folders), then swaps the two folders in one step (``renameat2(RENAME_EXCHANGE)`` on
    Linux, two renames elsewhere) and deletes the previous one.
@@ -67,7 +67,7 @@ def _problem(exc: OSError) -> str:
 
 
 def is_results_folder(path: str | Path) -> bool:
-    """True when ``path`` is a folder holding the :data:`MARKER` file."""
+    """True when ``path`` is a folder holding the `MARKER` file."""
     marker = Path(path) / MARKER
     try:
         return stat.S_ISREG(os.lstat(marker).st_mode)
@@ -85,7 +85,7 @@ def _written_by_gimwatch(folder: Path) -> set[str]:
 
 
 def write_marker(folder: Path, writer: str, files: Iterable[str] | None = None) -> Path:
-    """Write the :data:`MARKER` of ``folder``: its writer and the entries it wrote.
+    """Write the `MARKER` of ``folder``: its writer and the entries it wrote.
 
     Args:
         folder: The folder.
@@ -269,7 +269,7 @@ class Reservation:
 
 
 class ResultsFolder(Reservation):
-    """Write a results folder through a staging folder; :meth:`commit` puts it in place.
+    """Write a results folder through a staging folder; `commit` puts it in place.
 
     Example::
 

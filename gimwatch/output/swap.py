@@ -1,4 +1,4 @@
-"""Swapping a results folder into place: the steps :mod:`gimwatch.output.folders` takes.
+"""Swapping a results folder into place: the steps `gimwatch.output.folders` takes.
 
 The staging folder and the previous one are exchanged in one step where the system can
 (``renameat2(RENAME_EXCHANGE)``, Linux), else by two renames; the entries of the previous

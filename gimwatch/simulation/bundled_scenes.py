@@ -35,7 +35,7 @@ def resolve_scene(spec: str | Path) -> Path:
     """The file a scene argument names: the path itself if it exists, else a bundled scene.
 
     A path that does not exist and is not a bundled name is returned unchanged (the reader
-    then reports it, with :func:`missing_scene_hint`).
+    then reports it, with `missing_scene_hint`).
     """
     path = Path(spec)
     if path.exists():

@@ -10,7 +10,7 @@ Layout of ``DIR``::
     *.png            joint coordinates, watched metrics, energy drift
 
 plus the marker ``.gimwatch-results.json``. The folder is built beside ``DIR`` and swapped
-into place (:mod:`gimwatch.output.folders`), so a failed or interrupted write never leaves a
+into place (`gimwatch.output.folders`), so a failed or interrupted write never leaves a
 half-written folder, an existing good result is replaced only by a complete one, and a folder
 of other files is never replaced.
 """

@@ -1,17 +1,17 @@
 """Scene files: what is in the world, how to integrate it and what to watch.
 
-A scene is a TOML file read with :mod:`tomllib` and validated once, into frozen
+A scene is a TOML file read with `tomllib` and validated once, into frozen
 dataclasses. Unknown keys, wrong types, wrong lengths, negative durations, unknown effect,
-metric, joint or link names are :class:`~gimwatch.errors.SceneError` naming the file and
+metric, joint or link names are [`SceneError`][gimwatch.errors.SceneError] naming the file and
 the key (``scene.toml: effects.spring.stiffness: ...``). The schema is documented in the
 docs (``docs/scenes.md``, generated from the registries). Names are looked up in the live
-registries at parse time; :data:`EFFECT_KEYS`, :data:`METRIC_NAMES` and the other tuples
+registries at parse time; `EFFECT_KEYS`, `METRIC_NAMES` and the other tuples
 are the names registered at import.
 
 Joint-indexed values (``q``, ``v``, damping, stiffness, torques, targets) are given as a
 number (broadcast to every coordinate), a list (one per coordinate) or a table keyed by
 joint name (coordinates not named keep the default). They are resolved against the robot
-by :func:`joint_vector` when the simulation is built, because the names are the robot's.
+by `joint_vector` when the simulation is built, because the names are the robot's.
 """
 
 from __future__ import annotations
@@ -154,7 +154,7 @@ class Scene:
         return tuple(effect.name for effect in self.effects)
 
     def error(self, key: str, problem: str) -> SceneError:
-        """A :class:`SceneError` about ``key`` in this scene's file."""
+        """A [`SceneError`][gimwatch.errors.SceneError] about ``key`` in this scene's file."""
         return SceneError(self.source, key, problem)
 
 

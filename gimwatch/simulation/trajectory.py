@@ -1,4 +1,4 @@
-"""What a run computed: the :class:`Trajectory` record and the run statuses."""
+"""What a run computed: the `Trajectory` record and the run statuses."""
 
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ class Trajectory:
         actions: What ``on_alarm`` did (tolerances tightened, backend switched), in time order.
         backend: The dynamics backend the run ended on (the scene's, unless the robot was too
             large for Pinocchio's Data or ``switch-backend`` acted).
-        status: One of :data:`STATUSES`.
+        status: One of `STATUSES`.
         message: Why the run stopped early ("" when completed).
         steps: Integrator steps taken.
         rhs_evaluations: Right-hand-side (forward-dynamics) evaluations.
@@ -107,6 +107,6 @@ class Trajectory:
         )
 
     def raise_for_status(self) -> None:
-        """Raise :class:`SimulationError` if the run diverged or the solver failed."""
+        """Raise `SimulationError` if the run diverged or the solver failed."""
         if self.status in ("diverged", "failed"):
             raise SimulationError(float(self.t[-1]) if self.t.size else 0.0, self.message)

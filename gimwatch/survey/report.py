@@ -1,6 +1,6 @@
-"""Write a survey result (:class:`~gimwatch.survey.run.SurveyResult`): report, JSON, CSV, plots.
+"""Write a survey result (`SurveyResult`): report, JSON, CSV, plots.
 
-The folder is written beside its place and swapped in whole (:mod:`gimwatch.output.folders`),
+The folder is written beside its place and swapped in whole (`gimwatch.output.folders`),
 so an interrupted or failed write leaves the previous survey as it was, never a mix of two;
 an interrupted survey is written too, and says so.
 """
