@@ -35,10 +35,16 @@ survey: setup
 	$(PY) benchmarks/survey/update_readme.py
 
 # Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the measured block of
-# docs/findings/accuracy-costs.md.
+# docs/findings/accuracy-costs.md; each figure has one home (the cost sections in
+# benchmarks/cost/, the watch in a MuJoCo loop in benchmarks/watch_mujoco/, first contact in
+# benchmarks/startup/), so no figure exists twice.
 bench: setup
 	$(PY) -m pip install --quiet -c constraints.txt -e '.[test,notebooks,docs,pandas]'
-	$(VENV)/bin/gimwatch bench all -o benchmarks --page docs/findings/accuracy-costs.md
+	$(VENV)/bin/gimwatch bench conditioning estimators accuracy dynamics integrators longchain \
+		tighten -o benchmarks --page docs/findings/accuracy-costs.md
+	$(VENV)/bin/gimwatch bench lean tracker denoc watch -o benchmarks/cost
+	$(VENV)/bin/gimwatch bench watch_mujoco -o benchmarks/watch_mujoco
+	$(VENV)/bin/gimwatch bench startup -o benchmarks/startup
 
 # Planted bugs the tests must catch (tests/mutations.py): each applied in a temporary copy of
 # the tree, its test subset run; prints caught/missed/stale per mutant. On demand, not in test.

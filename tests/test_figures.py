@@ -112,6 +112,10 @@ def test_joint_coordinate_units_from_a_model():
     assert (names, units) == (["hinge", "slider"], ["rad", "m"])
 
 
+#: Tables of the sections measured in benchmarks/cost/ (each figure has one home).
+COST_TABLES = ("watch.json", "denoc.json")
+
+
 def _rows(folder: str, table: str) -> list[dict]:
     rows = json.loads((ROOT / folder / table).read_text(encoding="utf-8"))["rows"]
     return [{k: float("nan") if v is None else v for k, v in row.items()} for row in rows]
@@ -120,7 +124,8 @@ def _rows(folder: str, table: str) -> list[dict]:
 @pytest.mark.parametrize("png", sorted(bench_plots.FIGURES))
 def test_bench_figures_label_units(png, tmp_path):
     table, _, keep = bench_plots.FIGURES[png]
-    rows = [r for r in _rows("benchmarks", table) if keep(r)]
+    folder = "benchmarks/cost" if table in COST_TABLES else "benchmarks"
+    rows = [r for r in _rows(folder, table) if keep(r)]
     name = {
         "conditioning_cost.png": "draw_cost_vs_n",
         "estimators_pareto.png": "draw_pareto",
@@ -143,13 +148,13 @@ def test_every_bench_draw_function_is_in_the_figure_table():
 
 
 def test_watch_cost_bars_are_on_a_linear_axis():
-    ax = bench_plots.draw_watch_cost(_rows("benchmarks", "watch.json"), ax=_axes())
+    ax = bench_plots.draw_watch_cost(_rows("benchmarks/cost", "watch.json"), ax=_axes())
     assert ax.get_yscale() == "linear"
 
 
 def test_replot_redraws_from_the_tables_alone(tmp_path):
     for table in ("watch.json", "denoc.json"):
-        (tmp_path / table).write_text((ROOT / "benchmarks" / table).read_text())
+        (tmp_path / table).write_text((ROOT / "benchmarks" / "cost" / table).read_text())
     written = bench_plots.replot(tmp_path)
     assert sorted(p.name for p in written) == ["denoc_cost.png", "watch_cost.png"]
     assert all(p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in written)
