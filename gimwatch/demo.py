@@ -79,7 +79,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
     fig, axes = subplots(2, 2, (11, 7.5))
     t, eig = series(first, "eigenvalues")
     plots.plot_eigenvalues(t, eig, ax=axes[0, 0])
-    plots.plot_diagonal(t, series(first, "diagonal")[1], ax=axes[0, 1])
+    plots.plot_diagonal(t, series(first, "diagonal")[1], names=runs[first].dof_names, ax=axes[0, 1])
     axes[0, 1].set_ylabel("diagonal element M_ii [kg·m²]")  # the rod chains are all revolute
     axes[1, 0].semilogy(t, series(first, "kappa")[1])
     axes[1, 0].set(xlabel="time [s]", ylabel="κ₂ = λmax/λmin [-]", title="Condition number")

@@ -316,3 +316,34 @@ class Watch:
         from gimwatch.output.dataframe import watch_frame
 
         return watch_frame(self.arrays())
+
+    def plot(self, metrics: tuple[str, ...] | None = None, *, ax=None):
+        """The watched scalar metrics over time on a log axis, with the alarm threshold.
+
+        For the own-loop case, the figure a results folder has for ``simulate``
+        (`gimwatch.output.figures.plot_watch`). Vector metrics (eigenvalues, diagonal)
+        are left out.
+
+        Args:
+            metrics: Which watched metrics (default: every scalar one).
+            ax: Matplotlib Axes to draw on (a new figure's when None).
+
+        Returns:
+            The Axes.
+        """
+        from gimwatch.output.figures import plot_watch
+
+        scalar = [n for n, values in self.series.items() if not values or np.ndim(values[0]) == 0]
+        chosen = scalar if metrics is None else list(metrics)
+        unknown = [n for n in chosen if n not in scalar]
+        if unknown or not chosen:
+            raise InputError("the metrics to plot", f"watched scalar metrics {scalar}", unknown)
+        threshold = None
+        if self.alarm_metric in chosen:  # drawn where the metric's value is its severity
+            severity = self.metrics[self.alarm_metric].severity
+            if severity(self.alarm_threshold) == self.alarm_threshold:
+                threshold = self.alarm_threshold
+        series = {name: self.array(name) for name in chosen}
+        return plot_watch(
+            self.array("t"), series, alarm_metric=self.alarm_metric, threshold=threshold, ax=ax
+        )
