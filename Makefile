@@ -31,7 +31,7 @@ docs: setup
 # Regenerates benchmarks/survey/ and the table of docs/findings/survey.md
 .PHONY: survey
 survey: setup
-	$(VENV)/bin/gimwatch survey all --samples 200 --seed 0 --trajectory -o benchmarks/survey
+	$(VENV)/bin/gimwatch survey all --fixed --samples 200 --seed 0 --trajectory -o benchmarks/survey
 	$(PY) benchmarks/survey/update_readme.py
 
 # Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the measured block of

@@ -725,7 +725,7 @@ def test_survey_prose_is_the_committed_survey():
     chunk = inspect.signature(run_survey).parameters["chunk_size"].default
     assert int(_find(page, r"cut into chunks of (\d+)\)").group(1)) == chunk
     assert (
-        int(_find(page, r"survey all --samples (\d+) --trajectory").group(1))
+        int(_find(page, r"survey all --fixed --samples (\d+) --trajectory").group(1))
         == (survey["samples_per_robot"])
     )
 

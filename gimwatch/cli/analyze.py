@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import InputError
 from gimwatch.metrics.analyze import analyze, choose_path
@@ -53,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="analyse K random configurations within the joint limits",
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
-    parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    add_base_arguments(parser)
     add_output_arguments(parser, what="configurations")
     parser.add_argument(
         "--backend",
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
             "DeNOC path (Pinocchio's Data would need GBs)",
             file=sys.stderr,
         )
-    base = "floating" if args.floating else "fixed"
+    base = "floating" if analysis.floating else "fixed"
     records = [{"config": i, **r.to_dict()} for i, r in enumerate(results)]
     if args.json:
         header = {"robot": first.robot, "nv": first.nv, "base": base, "method": first.method}

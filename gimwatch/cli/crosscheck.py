@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.crosscheck import (
     DEFAULT_TOLERANCE,
@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seed", type=non_negative_int, default=0, help="seed of the random states"
     )
-    parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    add_base_arguments(parser)
     parser.add_argument(
         "--tolerance",
         type=float,

@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
 from gimwatch.cli._signals import LATCH, fault_pause
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.output.folders import Reservation
@@ -36,7 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seed", type=non_negative_int, default=0, help="seed of the random configurations"
     )
-    parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    add_base_arguments(parser)
     parser.add_argument(
         "--scheduler",
         metavar="ADDRESS",

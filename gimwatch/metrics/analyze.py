@@ -21,6 +21,7 @@ from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     check_random_budget,
+    default_floating,
     load_robot,
     neutral_configuration,
     parse_chain_spec,
@@ -46,12 +47,14 @@ class Analysis:
         chosen: True when ``auto`` chose the path (the caller may want to say why).
         placeholder_limits: Joints whose placeholder limits (|limit| >= 1e3 or none) random
             configurations replaced by ±π rad / ±1 m; empty when none were drawn.
+        floating: Whether the base was a free-flyer (as asked, or the robot's default).
     """
 
     results: tuple[GimAnalysis, ...]
     path: str
     chosen: bool
     placeholder_limits: tuple[str, ...] = ()
+    floating: bool = False
 
 
 def choose_path(spec: str, *, floating: bool = False, backend: str = "auto") -> str:
@@ -132,7 +135,7 @@ def analyze(
     *,
     random: int | None = None,
     seed: int = 0,
-    floating: bool = False,
+    floating: bool | None = None,
     backend: str = "auto",
     metrics: Sequence[str] | None = None,
     key: str = "q",
@@ -144,7 +147,8 @@ def analyze(
         q: One configuration as a user writes it (a continuous joint by its angle), or None.
         random: Analyse this many random configurations within the joint limits instead.
         seed: Seed of the random configurations (and of Lanczos on the O(n) path).
-        floating: Add a free-flyer base (dense path only).
+        floating: True: a free-flyer base (dense path only); False: fixed; None: the robot's
+            default (`default_floating`: example-robot-data's base for its robots).
         backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see `choose_path`.
         metrics: On the O(n) path, a subset of its metrics; the dense path computes all.
         key: The name of ``q`` in error messages (``--q`` for the CLI).
@@ -152,6 +156,8 @@ def analyze(
     Returns:
         The `Analysis`: the results and the path taken.
     """
+    if floating is None:
+        floating = parse_chain_spec(spec) is None and default_floating(spec)
     path = choose_path(spec, floating=floating, backend=backend)
     if metrics is not None and path != "denoc":
         raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
@@ -170,4 +176,5 @@ def analyze(
         path=path,
         chosen=backend == "auto",
         placeholder_limits=placeholders,
+        floating=floating,
     )

@@ -11,7 +11,10 @@ A specification is one of:
 DeNOC reads URDF only: an MJCF robot has ``urdf_xml == ""`` and its text in ``mjcf_xml``;
 ``gimwatch crosscheck`` then compares Pinocchio with MuJoCo (docs/robots.md).
 
-The base is fixed unless ``floating=True``, which adds Pinocchio's free-flyer root joint.
+The base is the one example-robot-data's loader gives a robot of its own (a free-flyer for
+legged robots, humanoids and drones, as ``example_robot_data.load(name)`` builds them; see
+`default_floating`), and fixed for chains and files; ``floating=True`` adds Pinocchio's
+free-flyer root joint, ``floating=False`` fixes the base.
 No `pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
 nv = 300), so callers ask for it with [`Robot.new_data`][gimwatch.model.robots.Robot.new_data] only
 when they need it.
@@ -57,6 +60,7 @@ __all__ = [
     "captured_c_output",
     "chain_robot",
     "check_random_budget",
+    "default_floating",
     "example_robot_names",
     "is_mjcf",
     "load_robot",
@@ -259,12 +263,27 @@ def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
     return chain_spec(n)
 
 
-def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None = None) -> Robot:
+def default_floating(spec: str | Path) -> bool:
+    """The base a robot gets when none is asked for: True for a free-flyer.
+
+    An example-robot-data robot gets its loader's (``free_flyer``: legged robots, humanoids,
+    drones), so that ``load_robot(name)`` has the nq and nv of ``example_robot_data.load``;
+    chains and files get a fixed base.
+    """
+    loader = example_robot_loaders().get(str(spec))
+    return bool(getattr(loader, "free_flyer", False)) if loader is not None else False
+
+
+def load_robot(
+    spec: str | Path, floating: bool | None = None, *, max_nv: int | None = None
+) -> Robot:
     """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
 
     Args:
         spec: The robot specification (see the module docstring).
-        floating: Add a free-flyer root joint (6 DoF) instead of fixing the base.
+        floating: True adds a free-flyer root joint (6 DoF), False fixes the base; None (the
+            default): `default_floating`, example-robot-data's base for its robots
+            (a free-flyer for ``anymal``, ``solo12``, ``talos``, ...), fixed otherwise.
         max_nv: Refuse generated chains with more velocity coordinates than this before
             building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
 
@@ -279,6 +298,8 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
     if not text.strip():
         raise InputError("the robot", "chain:N, a URDF path or an example-robot-data name", text)
     chain = parse_chain_spec(text)
+    if floating is None:
+        floating = chain is None and default_floating(text)
     if chain is not None:
         n = chain.n
         if max_nv is not None and n + 6 * floating > max_nv:

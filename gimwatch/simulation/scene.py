@@ -110,7 +110,7 @@ class RobotSpec:
     """Which robot: a ``chain:N`` / example-robot-data / URDF path string, or a chain table."""
 
     spec: str
-    floating: bool = False
+    floating: bool | None = None  # None: no ``base`` key, the robot's default base
     chain: dict[str, Any] | None = None
 
 
@@ -159,7 +159,9 @@ class Scene:
 
 
 def _robot(reader: TableReader, base_dir: Path | None) -> RobotSpec:
-    floating = reader.string("base", "fixed", choices=("fixed", "floating")) == "floating"
+    floating = None  # no base key: the robot's default (example-robot-data's, else fixed)
+    if "base" in reader.table:
+        floating = reader.string("base", "fixed", choices=("fixed", "floating")) == "floating"
     if "robot" not in reader.table:
         raise reader.fail("robot", "is required")
     value = reader.table["robot"]

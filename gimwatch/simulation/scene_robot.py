@@ -46,7 +46,7 @@ def load_scene_robot(scene) -> Robot:
     """Load the scene's robot; failures become a `SceneError` on key ``robot``."""
     try:
         if scene.robot.chain is not None:
-            return _chain_robot(scene.robot.chain, scene.robot.floating)
+            return _chain_robot(scene.robot.chain, bool(scene.robot.floating))
         floating = scene.robot.floating
         return load_robot(
             scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None

@@ -227,7 +227,7 @@ def run_survey(
     *,
     samples: int = 200,
     seed: int = 0,
-    floating: bool = False,
+    floating: bool | None = None,
     chunk_size: int = 50,
     workers: int | None = None,
     scheduler: str | None = None,
@@ -245,8 +245,10 @@ def run_survey(
         samples: K, random configurations per robot (>= 1), besides the neutral one.
         seed: Seed of [`random_configurations`][gimwatch.model.robots.random_configurations] (same
             for every robot).
-        floating: Give every robot a free-flyer base. Without it, robots with no joint
-            (drones) get one anyway and say so in ``note``.
+        floating: True gives every robot a free-flyer base, False a fixed one; None (the
+            default) each robot its own (`default_floating`: example-robot-data's base,
+            a free-flyer for legged robots and humanoids). A robot with no joint on a fixed base
+            (a drone) gets a free-flyer anyway and says so in ``note``.
         chunk_size: Samples per task.
         workers: Local processes; 1 runs in this process. Default: this process for small
             surveys (estimated under a few seconds), else every core.
