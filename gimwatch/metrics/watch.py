@@ -347,3 +347,16 @@ class Watch:
         return plot_watch(
             self.array("t"), series, alarm_metric=self.alarm_metric, threshold=threshold, ax=ax
         )
+
+    def __repr__(self) -> str:
+        """One line: the robot, the metrics, the samples taken and the alarm."""
+        robot = self.robot.name if self.robot is not None else type(self.dynamics).__name__
+        alarm = (
+            f", alarm={self.alarm_metric} > {self.alarm_threshold:.3g}"
+            if self.alarm_metric is not None
+            else ""
+        )
+        return (
+            f"Watch(robot={robot!r}, metrics={list(self.metrics)}, samples={len(self.times)}, "
+            f"alarms={len(self.alarms)}{alarm})"
+        )

@@ -66,6 +66,16 @@ class Trajectory:
     actions: tuple[str, ...] = field(default=())
     backend: str = ""
 
+    def __repr__(self) -> str:
+        """One line: the robot, how the run ended, its samples and what was watched."""
+        span = f"t = 0..{self.t[-1]:.4g} s" if self.t.size else "no sample"
+        watched = [k.removeprefix("watch_") for k in self.watch if k != "watch_t"]
+        return (
+            f"Trajectory(robot={self.robot!r}, status={self.status!r}, {span}, "
+            f"{self.t.size} samples, {self.steps} steps, watched={watched}, "
+            f"alarms={len(self.alarms)})"
+        )
+
     @property
     def conservative(self) -> bool:
         """Whether the energy is a conserved quantity of this scene."""
