@@ -126,11 +126,11 @@ def test_notebooks_are_stored_with_their_outputs(path):
 
 
 def test_stated_times_are_the_measured_ones():
-    """Times on the front pages come from benchmarks/startup.csv and newcomer/times.json."""
+    """Times on the front pages come from benchmarks/startup/ and newcomer/times.json."""
     import csv
     import json
 
-    with (ROOT / "benchmarks" / "startup.csv").open(newline="") as handle:
+    with (ROOT / "benchmarks" / "startup" / "startup.csv").open(newline="") as handle:
         startup = {row["case"]: float(row["median_s"]) for row in csv.DictReader(handle)}
     newcomer = json.loads((ROOT / "benchmarks" / "newcomer" / "times.json").read_text())
 
@@ -142,7 +142,7 @@ def test_stated_times_are_the_measured_ones():
     for text in (
         f"`import gimwatch` takes {startup['import gimwatch']:.2f} s against "
         f"{startup['import pinocchio']:.2f} s",
-        f"SciPy and numba: {startup['import gimwatch + first names']:.2f} s",
+        f"Pinocchio and SciPy: {startup['import gimwatch + first names']:.2f} s",
         f"`gimwatch analyze ur5` takes {startup['gimwatch analyze ur5']:.2f} s, {ratio:.2f}x",
         f"`gimwatch demo` takes {startup['gimwatch demo']:.1f} s",
     ):
@@ -157,8 +157,14 @@ def test_stated_times_are_the_measured_ones():
         f"the Python above {newcomer['readme_python_snippet_s']:.1f} s",
         f"`gimwatch simulate chain_10` {newcomer['simulate_chain_10_s']:.1f} s",
         f"`gimwatch demo` {newcomer['demo_s']:.0f} s",
+        f"{newcomer['readme_watch_loop_first_run_s']:.1f} s for the block above, "
+        f"{newcomer['readme_watch_loop_second_run_s']:.1f} s on later runs",
     ):
         assert text in readme, text
+    assert (
+        f"{newcomer['readme_watch_loop_first_run_s']:.1f} s on its first run in a fresh install, "
+        f"{newcomer['readme_watch_loop_second_run_s']:.1f} s after" in started
+    )
     assert newcomer["install_analysis_and_simulation_s"] < 120  # "under 2 minutes"
 
 
@@ -250,3 +256,25 @@ def test_console_transcripts_match(block, tmp_path):
         done = run_gimwatch(command, tmp_path)
         shown = (done.stdout + done.stderr).strip("\n")
         assert shown == expected, f"{_block_id(block)}: {command}"
+
+
+@pytest.mark.parametrize(
+    ("measured", "command"),
+    [
+        ("benchmarks/startup/summary.json", "gimwatch bench startup -o benchmarks/startup"),
+        ("benchmarks/newcomer/times.json", "bash benchmarks/newcomer/measure.sh"),
+    ],
+)
+def test_measured_times_are_not_older_than_the_code_they_time(measured, command):
+    """A timing file records the modules its commands imported (gimwatch.bench.freshness)."""
+    import json
+
+    from gimwatch.bench.freshness import FINGERPRINT_KEY, stale_modules
+
+    record = json.loads((ROOT / measured).read_text())
+    if "sections" in record:
+        record = record["sections"]["startup"]
+    fingerprint = record[FINGERPRINT_KEY]
+    assert {"gimwatch/cli/analyze.py", "gimwatch/model/robots.py"} <= set(fingerprint["modules"])
+    stale = stale_modules(fingerprint, ROOT)
+    assert not stale, f"{measured} predates changes to {stale}: regenerate it with `{command}`"

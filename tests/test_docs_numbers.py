@@ -1147,7 +1147,7 @@ def test_figures_about_what_the_tests_run_are_the_tests():
 
 
 def test_startup_and_chain_1000_settings_are_the_committed_runs():
-    repeats = {r["case"]: int(r["repeats"]) for r in _csv("startup.csv")}
+    repeats = {r["case"]: int(r["repeats"]) for r in _csv("startup/startup.csv")}
     page = "docs/getting-started.md"
     match = _find(page, r"\(`gimwatch bench startup`, medians of (\d+) runs,")
     quoted = ("import gimwatch", "import pinocchio", "gimwatch analyze ur5")
