@@ -4,7 +4,8 @@ Every kernel is compiled with ``cache=True``: the first run compiles it (seconds
 seconds for the DeNOC and tracker kernels) and writes the machine code next to the module
 (``__pycache__``) or, where the package folder is not writable (a system install), to the
 user's cache folder (numba's user-wide locator, ``~/.cache/numba`` on Linux;
-``NUMBA_CACHE_DIR`` overrides both). Later processes load it in milliseconds.
+``NUMBA_CACHE_DIR`` overrides both). Later processes load it in milliseconds. Where no
+folder can be written at all, the kernels are compiled in every process instead of failing.
 
 A compilation (a cache miss, not a cache load) of a gimwatch kernel logs one line on the
 ``gimwatch`` logger at WARNING level, once per process, so that a slow first run says why it
@@ -56,7 +57,16 @@ NOTE = CompileNote()
 event.register("numba:compile", NOTE)
 
 
-def njit(*args: Any, **options: Any):
-    """``numba.njit`` with ``cache=True`` unless told otherwise."""
+def njit(function: Any = None, **options: Any):
+    """``numba.njit`` with ``cache=True`` unless told otherwise (``@njit`` or ``@njit(...)``)."""
     options.setdefault("cache", True)
-    return numba.njit(*args, **options)
+
+    def decorate(python_function):
+        try:
+            return numba.njit(**options)(python_function)
+        except RuntimeError as exc:  # numba found no folder it may write its cache in
+            if "cannot cache" not in str(exc):
+                raise
+            return numba.njit(**{**options, "cache": False})(python_function)
+
+    return decorate if function is None else decorate(function)

@@ -48,3 +48,24 @@ def test_every_kernel_is_cached_and_compiled_through_gimwatch_jit():
                 raise AssertionError(f"{path}: import njit from gimwatch.jit, not numba")
             if isinstance(node, ast.keyword) and node.arg == "cache":
                 assert getattr(node.value, "value", True) is True, f"{path}: cache=False"
+
+
+def test_no_writable_cache_folder_compiles_without_cache(monkeypatch):
+    import gimwatch.jit as jit
+
+    real = jit.numba.njit
+    asked = []
+
+    def refusing(**options):
+        asked.append(options["cache"])
+        if options["cache"]:
+            raise RuntimeError("cannot cache function 'f': no locator available for file 'x'")
+        return real(**options)
+
+    monkeypatch.setattr(jit.numba, "njit", refusing)
+
+    @jit.njit
+    def twice(x):
+        return 2.0 * x
+
+    assert twice(np.float64(2.0)) == 4.0 and asked == [True, False]
