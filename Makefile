@@ -23,8 +23,9 @@ test: setup
 	$(PY) -m pytest -n 2 --nbmake tests $(wildcard notebooks/*.ipynb)
 	$(MAKE) docs
 
-# The documentation site (docs/ -> site/), warnings as errors. Its python code blocks are
-# run by tests/test_docs.py.
+# The documentation site (docs/ -> site/), warnings as errors. Its python blocks, sh blocks and
+# console transcripts are run by tests/test_docs.py; its API pages are read by
+# tests/test_api_site.py.
 docs: setup
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
