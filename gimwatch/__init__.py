@@ -56,11 +56,13 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
         Robot,
+        default_floating,
         example_robot_names,
         load_robot,
         neutral_configuration,
         random_configurations,
     )
+    from gimwatch.simulation.bundled_scenes import bundled_scenes
     from gimwatch.simulation.results_folder import summarize, write_simulation
     from gimwatch.simulation.scene import Scene, load_scene, parse_scene
     from gimwatch.simulation.simulate import Simulation, run_scene
@@ -105,6 +107,7 @@ _EXPORTS: dict[str, str] = {
     "URDFWarning": "gimwatch.errors",
     "Watch": "gimwatch.metrics.watch",
     "analyze_configuration": "gimwatch.metrics.dense_analysis",
+    "bundled_scenes": "gimwatch.simulation.bundled_scenes",
     "chain_spec": "gimwatch.model.chains",
     "check_gim": "gimwatch.metrics.conditioning",
     "condition_estimate_1norm": "gimwatch.metrics.conditioning",
@@ -122,6 +125,7 @@ _EXPORTS: dict[str, str] = {
     "kappa_matrix_free": "gimwatch.metrics.matrix_free",
     "ldlt_pivots": "gimwatch.metrics.conditioning",
     "load_robot": "gimwatch.model.robots",
+    "default_floating": "gimwatch.model.robots",
     "load_scene": "gimwatch.simulation.scene",
     "neutral_configuration": "gimwatch.model.robots",
     "parse_scene": "gimwatch.simulation.scene",
@@ -172,11 +176,13 @@ __all__ = [
     "Watch",
     "__version__",
     "analyze_configuration",
+    "bundled_scenes",
     "chain_spec",
     "check_gim",
     "condition_estimate_1norm",
     "condition_number",
     "crosscheck_robot",
+    "default_floating",
     "diagonal_ratio",
     "eigenvalues",
     "estimator_quality",
