@@ -143,7 +143,7 @@ def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
         ax.set(xscale="log", yscale="log")
         for axis, values in ((ax.xaxis, delta), (ax.yaxis, robot.metrics["kappa"])):
             finite = np.asarray(values)[np.isfinite(values) & (np.asarray(values) > 0)]
-            if finite.size and np.log10(finite.max() / finite.min()) >= 1.0:
+            if finite.size and np.ptp(np.log10(finite)) >= 1.0:  # spans a decade or more
                 # at most three labelled decades: no colliding ticks
                 axis.set_major_locator(LogLocator(numticks=3))
                 axis.set_minor_formatter(NullFormatter())
