@@ -214,9 +214,3 @@ def _run(argv: Sequence[str] | None) -> int:
     # 20-40x slower on 2 cores, so the command line keeps BLAS on one thread.
     with threadpool_limits(limits=1, user_api="blas"):
         return int(args.run(args))
-
-
-def _entry_point() -> None:  # console script of earlier installs: see gimwatch.__main__
-    from gimwatch.__main__ import entry_point
-
-    entry_point()

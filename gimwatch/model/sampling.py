@@ -9,15 +9,12 @@ sphere.
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-
-if TYPE_CHECKING:
-    from gimwatch.model.robots import Robot
 
 __all__ = [
     "DEFAULT_MAX_RANDOM_WORK",
@@ -39,6 +36,14 @@ MAX_RANDOM_NUMBERS = 50_000_000
 #: call (each an O(nv) to O(nv^3) analysis); ``$GIMWATCH_MAX_RANDOM_WORK`` overrides it.
 DEFAULT_MAX_RANDOM_WORK = 2_000_000
 MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
+
+
+class Robot(Protocol):
+    """What sampling reads of a :class:`gimwatch.model.robots.Robot` (no import: no cycle)."""
+
+    name: str
+    nq: int
+    model: pin.Model
 
 
 def unit_block_size(joint: pin.JointModel) -> int:

@@ -18,14 +18,11 @@ scene reference read `ALARM_ACTIONS`.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from typing import Any, ClassVar, Protocol
 
 from gimwatch.metrics.watch import Alarm
 from gimwatch.simulation.backends import make_backend
 from gimwatch.simulation.integrators import INTEGRATORS
-
-if TYPE_CHECKING:
-    from gimwatch.simulation.simulate import Simulation
 
 __all__ = [
     "ALARM_ACTIONS",
@@ -41,6 +38,21 @@ __all__ = [
 MOST_ACCURATE_BACKEND = "aba"
 #: ``tighten`` never asks for a relative tolerance below this (SciPy clamps at 100·eps).
 RTOL_FLOOR = 1e-13
+
+
+class Simulation(Protocol):
+    """What an action reads and changes of a :class:`gimwatch.simulation.simulate.Simulation`.
+
+    A protocol rather than an import: ``simulate`` imports this module's registry.
+    """
+
+    scene: Any
+    robot: Any
+    gravity: Any
+    watch: Any
+    integrator: Any
+    backend: Any
+    actions: list[str]
 
 
 class AlarmAction:
