@@ -1,6 +1,6 @@
 """The records every bench section returns: fixed-column tables, its result, its context.
 
-In a module of their own so that the report writer (:mod:`gimwatch.bench.report`), which the
+In a module of their own so that the report writer (`gimwatch.bench.report`), which the
 package's run imports, can read them without importing the package back.
 """
 

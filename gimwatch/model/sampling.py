@@ -39,7 +39,7 @@ MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
 
 
 class Robot(Protocol):
-    """What sampling reads of a :class:`gimwatch.model.robots.Robot` (no import: no cycle)."""
+    """What sampling reads of a `gimwatch.model.robots.Robot` (no import: no cycle)."""
 
     name: str
     nq: int

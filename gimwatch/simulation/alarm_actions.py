@@ -41,7 +41,7 @@ RTOL_FLOOR = 1e-13
 
 
 class Simulation(Protocol):
-    """What an action reads and changes of a :class:`gimwatch.simulation.simulate.Simulation`.
+    """What an action reads and changes of a `gimwatch.simulation.simulate.Simulation`.
 
     A protocol rather than an import: ``simulate`` imports this module's registry.
     """
