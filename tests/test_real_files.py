@@ -36,3 +36,174 @@ def test_prolog_scan_is_linear_not_exponential():
     assert root_element_name(many) == "robot"
     assert root_element_name(huge) == "robot"
     assert time.perf_counter() - start < 60  # a generous bound: linear takes ~0.1 s
+
+
+# --- real-world conventions: read with one warning, M unchanged ---------------------------
+
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import warnings  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pinocchio as pin  # noqa: E402
+from real_shapes import arm  # noqa: E402
+
+from gimwatch.crosscheck import crosscheck_robot  # noqa: E402
+from gimwatch.errors import URDFError, URDFWarning  # noqa: E402
+from gimwatch.model.robots import load_robot  # noqa: E402
+
+QUIRKS = [
+    "header",
+    "crlf",
+    "bom",
+    "late_declaration",
+    "namespace",
+    "unlimited_effort",
+    "missing_limit",
+    "reversed_limit",
+    "comma_origins",
+    "bad_shapes",
+    "empty_dynamics",
+    "nul_tail",
+]
+#: Read with one "lenient" warning (the others are plain XML that every parser reads).
+WARNED = set(QUIRKS) - {"header", "crlf", "bom"}
+#: Refused (or complained about) by urdfdom, Pinocchio's parser, given the raw text.
+REFUSED_RAW = {"missing_limit", "comma_origins", "bad_shapes", "empty_dynamics"}
+
+
+def _write(tmp_path, name: str, text: str):
+    path = tmp_path / f"{name}.urdf"
+    path.write_bytes(text.encode("utf-8"))
+    return path
+
+
+def _gims(robot, count: int = 4) -> list[np.ndarray]:
+    rng = np.random.default_rng(3)
+    data = robot.model.createData()
+    return [
+        pin.crba(robot.model, data, rng.uniform(-2.9, 2.9, robot.nq)).copy() for _ in range(count)
+    ]
+
+
+@pytest.fixture(scope="module")
+def clean_gims(tmp_path_factory):
+    path = _write(tmp_path_factory.mktemp("clean"), "clean", arm())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the clean arm is read without any warning
+        return _gims(load_robot(path))
+
+
+@pytest.mark.parametrize("quirk", [*QUIRKS, "all"])
+def test_a_convention_that_does_not_change_m_is_read_with_one_warning(quirk, tmp_path, clean_gims):
+    flags = dict.fromkeys(QUIRKS, True) if quirk == "all" else {quirk: True}
+    path = _write(tmp_path, quirk, arm(**flags))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load_robot(path)
+    lenient = [w for w in caught if "lenient" in str(w.message)]
+    expected = 1 if (quirk == "all" or quirk in WARNED) else 0
+    assert len(lenient) == expected, [str(w.message) for w in caught]
+    assert all(issubclass(w.category, URDFWarning) for w in lenient)
+    assert all(str(path) in str(w.message) for w in lenient)
+    # the same arm: M(q) entry by entry against the clean file's, through Pinocchio
+    for M, reference in zip(_gims(robot), clean_gims, strict=True):
+        np.testing.assert_allclose(M, reference, rtol=0, atol=1e-14 * np.abs(reference).max())
+
+
+@pytest.mark.parametrize("quirk", sorted(REFUSED_RAW))
+def test_pinocchio_alone_refuses_the_raw_file(quirk, tmp_path):
+    """The control: without the normalisation, urdfdom refuses these files or prints errors."""
+    path = _write(tmp_path, quirk, arm(**{quirk: True}))
+    code = f"import pinocchio; pinocchio.buildModelFromXML(open({str(path)!r}).read())"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert done.returncode != 0 or "Error" in done.stderr, quirk
+
+
+def test_mimic_of_a_fixed_joint_is_read_and_cross_checked(tmp_path):
+    path = _write(tmp_path, "eve_like", arm(mimic_of_fixed=True, unlimited_effort=True, bom=True))
+    with pytest.warns(URDFWarning, match="mimic> of a fixed joint .finger_joint -> flange_joint"):
+        robot = load_robot(path)
+    assert robot.nv == 8 and "finger_joint" in robot.joint_names
+    result = crosscheck_robot(robot, samples=3, peer="mujoco")  # DeNOC and MuJoCo against CRBA
+    assert result.passed and result.mujoco_gim_rel_err is not None, result
+
+
+def test_declared_latin1_is_read_and_undeclared_is_refused(tmp_path):
+    text = arm().replace('encoding="utf-8"', 'encoding="ISO-8859-1"')
+    text = text.replace("<robot", "<!-- Auteur : Hélène Müller -->\n<robot", 1)
+    path = tmp_path / "latin1.urdf"
+    path.write_bytes(text.encode("latin-1"))
+    assert load_robot(path).nv == 7
+    path.write_bytes(text.replace('encoding="ISO-8859-1"', 'encoding="utf-8"').encode("latin-1"))
+    with pytest.raises(URDFError, match="is not UTF-8 text"):
+        load_robot(path)
+
+
+def test_an_unexpanded_xacro_expression_is_refused_with_a_hint(tmp_path):
+    text = arm().replace('xyz="0 0 0.1575"', 'xyz="$(optenv IIWA_XYZ 0 0 0.1575)"')
+    with pytest.raises(URDFError, match="unexpanded xacro or roslaunch expression"):
+        load_robot(_write(tmp_path, "xacro_left", text))
+
+
+def test_the_cli_reads_every_quirk_with_one_warning_line(tmp_path):
+    path = _write(tmp_path, "everything", arm(**dict.fromkeys(QUIRKS, True)))
+    for command in ("analyze", "crosscheck"):
+        done = subprocess.run(
+            [sys.executable, "-m", "gimwatch", command, str(path)],
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+            check=False,
+        )
+        assert done.returncode == 0, done.stderr
+        lines = [line for line in done.stderr.splitlines() if line.startswith("gimwatch:")]
+        assert lines and all(line.startswith("gimwatch: warning: ") for line in lines), lines
+        assert "lenient" in lines[0] and str(path) in lines[0]
+
+
+# --- every loader answers in time proportional to the size of its input -------------------
+
+HOSTILE = {
+    "100k_leading_comments": "<!-- c -->\n" * 100_000 + arm(),
+    "10MB_comment": "<!--" + "x" * 10_000_000 + "-->\n" + arm().split("?>", 1)[1],
+    "unclosed_comments": arm().replace("</robot>", "<!-- " * 200_000 + "</robot>"),
+    "nested_declarations": "<?xml version='1.0'?>" + "<?pi x?>" * 100_000 + arm().split("?>", 1)[1],
+    "deep_nesting": arm().replace("</robot>", "<a>" * 50_000 + "</a>" * 50_000 + "</robot>"),
+    "long_number": arm().replace('value="5"', 'value="' + "1" * 60_000 + 'x"'),
+}
+_LOADERS = """
+import sys, time, warnings
+warnings.simplefilter("ignore")
+from gimwatch.errors import GimwatchError
+from gimwatch.model.robots import load_robot
+from gimwatch.denoc import DenocModel
+path = sys.argv[1]
+text = open(path, encoding="utf-8").read()
+for name, load in (("load_robot", lambda: load_robot(path)),
+                   ("denoc", lambda: DenocModel.from_urdf(text, source=path))):
+    start = time.perf_counter()
+    try:
+        load()
+        outcome = "loaded"
+    except GimwatchError as exc:
+        outcome = "refused: " + str(exc).splitlines()[0][:80]
+    print(name, outcome, round(time.perf_counter() - start, 3))
+"""
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE))
+def test_every_loader_answers_hostile_text_in_linear_time(case, tmp_path):
+    """A load or a one-line refusal, never a hang (the bound is generous: ~100x the time)."""
+    path = tmp_path / f"{case}.urdf"
+    path.write_text(HOSTILE[case], encoding="utf-8")
+    done = subprocess.run(
+        [sys.executable, "-c", _LOADERS, str(path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    assert [line.split()[0] for line in lines] == ["load_robot", "denoc"], done.stdout

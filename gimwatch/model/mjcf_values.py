@@ -27,7 +27,7 @@ __all__ = ["MJCF_JOINT_TYPES", "check_mjcf"]
 #: Joint types of MJCF that Pinocchio's parser turns into joints.
 MJCF_JOINT_TYPES = ("hinge", "slide", "ball", "free")
 
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")  # unambiguous: linear
 #: Attribute -> how many numbers it holds, for the elements whose values reach M(q).
 _COUNTS = {
     "body": {"pos": 3, "quat": 4, "euler": 3},

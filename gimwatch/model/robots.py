@@ -155,11 +155,31 @@ def _read_urdf(path: Path) -> str:
         size = path.stat().st_size
         if size > MAX_URDF_BYTES:
             raise URDFError(str(path), f"is {size} bytes, more than {MAX_URDF_BYTES} for a URDF")
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise URDFError(str(path), f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
+        return decode_xml(path.read_bytes(), str(path))
     except OSError as exc:
         raise URDFError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
+
+
+def decode_xml(data: bytes, source: str) -> str:
+    """XML bytes as text: UTF-8 without a byte-order mark, or the declared encoding.
+
+    CAD exporters write ``<?xml version="1.0" encoding="ISO-8859-1"?>`` with accented
+    names in comments; a file that is neither is refused naming the first bad byte.
+    """
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        failure = exc
+    _, found, rest = data[:200].decode("ascii", errors="replace").partition("encoding=")
+    declared = rest[1:].split(rest[0], 1)[0] if found and rest[:1] in ("'", '"') else ""
+    try:
+        if declared and declared.lower().replace("_", "-") not in ("utf-8", "utf8"):
+            return data.decode(declared)
+    except (LookupError, UnicodeDecodeError):
+        pass
+    raise URDFError(
+        source, f"is not UTF-8 text ({failure.reason} at byte {failure.start})"
+    ) from failure
 
 
 def path_problem(path: Path) -> str:
@@ -172,10 +192,11 @@ def path_problem(path: Path) -> str:
     return "no such file"
 
 
-def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
-    from gimwatch.model.urdf_text import check_urdf
+def _build_model(xml: str, source: str, floating: bool) -> tuple[pin.Model, str]:
+    """Pinocchio's model of checked URDF text, and the text it read (normalised quirks)."""
+    from gimwatch.model.urdf_text import check_urdf_text
 
-    root = check_urdf(xml, source)
+    root, xml = check_urdf_text(xml, source, stacklevel=3)
     depth = _tree_depth(root)
     if depth > MAX_TREE_DEPTH:
         raise URDFError(
@@ -197,7 +218,7 @@ def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     if model is None or errors:
         detail = errors[0].removeprefix("Error:").strip() if errors else str(failure)
         raise URDFError(source, f"Pinocchio cannot build a model: {detail}")
-    return model
+    return model, xml
 
 
 def _tree_depth(root) -> int:
@@ -321,7 +342,7 @@ def load_robot(
         close = difflib.get_close_matches(text, example_robot_loaders(), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
-    model = _build_model(xml, source, floating)
+    model, xml = _build_model(xml, source, floating)
     if model.nv == 0:
         raise RobotError(
             text, "has no degree of freedom with a fixed base; load it with a floating base"
@@ -347,7 +368,7 @@ def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
         raise _too_deep(f"chain:{spec.n}")
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
-    model = _build_model(xml, source, floating)
+    model, xml = _build_model(xml, source, floating)
     return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
 
 

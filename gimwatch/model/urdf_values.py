@@ -60,7 +60,11 @@ MAX_MAGNITUDE = 1e15
 #: A joint axis is normalised by its length; components of magnitude outside this range
 #: make that length overflow (1e200) or underflow (1e-300) in double precision.
 AXIS_RANGE = (1e-100, 1e100)
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf|infinity)", re.I)
+#: A number as urdfdom reads one; unambiguous (``\d+(?:\.\d*)?``, not ``\d+\.?\d*``) so that a
+#: failing match backtracks in linear, not quadratic, time on a 65,536-digit attribute.
+_NUMBER = re.compile(
+    r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf|infinity)", re.I
+)
 _GEOMETRY = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",)}
 
 
@@ -77,7 +81,12 @@ def _floats(
     parts = (text or "").split()
     if len(parts) != count or not all(_NUMBER.fullmatch(p) for p in parts):
         rule = "a number" if count == 1 else f"{count} numbers separated by spaces"
-        raise URDFError(source, f"{what} must be {rule}, got {text!r}", element=where)
+        hint = (
+            " (an unexpanded xacro or roslaunch expression: run xacro on the file first)"
+            if "$(" in (text or "") or "${" in (text or "")
+            else ""
+        )
+        raise URDFError(source, f"{what} must be {rule}, got {text!r}{hint}", element=where)
     values = [float(p) for p in parts]
     if not all(math.isfinite(v) for v in values):
         raise URDFError(source, f"{what} must be finite, got {text!r}", element=where)
