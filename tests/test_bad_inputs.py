@@ -381,7 +381,7 @@ BAD_ARGUMENTS = [
     (["analyze", "chain:4", "--metrics", "kappa"], "--metrics must be used with the O(n) path"),
     (["analyze", "chain:396", "--floating"], "nv = 402 is too large for Pinocchio's Data"),
     (["analyze", "nope"], "robot 'nope': not chain:N"),
-    (["analyze"], "the following arguments are required: robot"),
+    (["analyze"], "the following arguments are required: ROBOT"),
     ([], "the following arguments are required: command"),
     (["frobnicate"], "unknown command 'frobnicate'"),
     (["analyze", "chain:2", "--bogus"], "unrecognized arguments: --bogus"),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import pytest
 
@@ -207,3 +208,87 @@ def test_every_loader_answers_hostile_text_in_linear_time(case, tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     lines = done.stdout.splitlines()
     assert [line.split()[0] for line in lines] == ["load_robot", "denoc"], done.stdout
+
+
+# --- batches report per file; nothing compared is not a pass -------------------------------
+
+MASSLESS = (
+    "<robot name='massless'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
+    "<parent link='a'/><child link='b'/><axis xyz='0 0 1'/>"
+    "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>"
+)
+
+
+@pytest.fixture(scope="module")
+def batch_folder(tmp_path_factory):
+    """30 files: 27 good arms and chains, 3 bad (malformed XML, a zero axis, a cycle)."""
+    folder = tmp_path_factory.mktemp("batch")
+    for i in range(27):
+        text = arm(header=i % 2 == 0, crlf=i % 3 == 0) if i % 3 else _chain_text(2 + i % 4)
+        (folder / f"good_{i:02d}.urdf").write_text(text, encoding="utf-8")
+    (folder / "bad_xml.urdf").write_text("<robot name='x'><link name='a'>", encoding="utf-8")
+    (folder / "bad_axis.urdf").write_text(arm().replace('xyz="0 1 0"', 'xyz="0 0 0"', 1))
+    (folder / "bad_cycle.urdf").write_text(
+        arm().replace('<child link="base"/>', '<child link="link_3"/>', 1)
+    )
+    return folder
+
+
+def _chain_text(n: int) -> str:
+    from gimwatch.model.chains import chain_spec, generate_chain_urdf
+
+    return generate_chain_urdf(chain_spec(n))
+
+
+def _gimwatch(*args: str, cwd) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "gimwatch", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        check=False,
+        timeout=600,
+    )
+
+
+def test_crosscheck_of_a_folder_reports_27_results_and_3_refusals(batch_folder, tmp_path):
+    import json
+
+    done = _gimwatch("crosscheck", str(batch_folder), "--samples", "2", "--json", cwd=tmp_path)
+    assert done.returncode == 2, done.stderr[-3000:]
+    robots = json.loads(done.stdout)["robots"]
+    assert len(robots) == 30
+    statuses = [r["status"] for r in robots]
+    assert statuses.count("passed") == 27 and statuses.count("refused") == 3
+    refused = {Path(r["robot"]).name: r["note"] for r in robots if r["status"] == "refused"}
+    assert set(refused) == {"bad_xml.urdf", "bad_axis.urdf", "bad_cycle.urdf"}
+    assert "non-zero vector" in refused["bad_axis.urdf"]
+    text = _gimwatch("crosscheck", str(batch_folder), "--samples", "2", cwd=tmp_path)
+    assert text.returncode == 2 and "27/30 passed (tolerance 1e-10), 3 refused" in text.stdout
+
+
+def test_analyze_and_survey_go_on_past_a_refused_file(batch_folder, tmp_path):
+    import csv
+    import io
+
+    files = [str(batch_folder / name) for name in ("good_01.urdf", "bad_xml.urdf", "good_02.urdf")]
+    done = _gimwatch("analyze", *files, "--csv", cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    rows = list(csv.DictReader(io.StringIO(done.stdout)))
+    assert [bool(r["refused"]) for r in rows] == [False, True, False]
+    assert "malformed XML" in rows[1]["refused"] and rows[0]["kappa"]
+    survey = _gimwatch("survey", *files, "--samples", "3", "-o", str(tmp_path / "s"), cwd=tmp_path)
+    assert survey.returncode == 2, survey.stderr
+    assert "refused: " + files[1] in survey.stdout and (tmp_path / "s" / "survey.json").is_file()
+
+
+def test_a_crosscheck_that_compares_nothing_is_not_a_pass(tmp_path):
+    path = tmp_path / "massless.urdf"
+    path.write_text(MASSLESS, encoding="utf-8")
+    result = crosscheck_robot(load_robot(path), samples=3)
+    assert result.status == "not compared" and not result.passed
+    assert result.note.startswith("not compared: M(q) ≡ 0")
+    done = _gimwatch("crosscheck", str(path), cwd=tmp_path)
+    assert done.returncode == 1
+    assert "0/1 passed" in done.stdout and "1 not compared" in done.stdout
+    assert "passed" not in done.stdout.split("\n")[2]  # the row is labelled, not passed
