@@ -175,11 +175,26 @@ class CallableLaw:
         self.robot_name = robot.name
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """The law's τ(t, q, v) as a float array, or `TorqueLawError`."""
+        """The law's τ(t, q, v) as a float array, or `TorqueLawError`.
+
+        The law sees read-only views of q and v (no copy): writing to them would change the
+        integrator's state behind its back, so it is an error naming the law.
+        """
+        q_view, v_view = q.view(), v.view()
+        q_view.flags.writeable = v_view.flags.writeable = False
         try:
-            tau = self.law(t, q, v)
+            tau = self.law(t, q_view, v_view)
         except GimwatchError:
             raise
+        except ValueError as exc:
+            if "read-only" not in str(exc):
+                raise TorqueLawError(
+                    self.name, f"raised ValueError at t = {t:.6g} s: {exc}"
+                ) from exc
+            raise TorqueLawError(
+                self.name,
+                f"must not modify q or v (read-only; copy them first) at t = {t:.6g} s: {exc}",
+            ) from exc
         except Exception as exc:
             raise TorqueLawError(
                 self.name, f"raised {exc.__class__.__name__} at t = {t:.6g} s: {exc}"
@@ -195,7 +210,7 @@ class CallableLaw:
             raise TorqueLawError(
                 self.name, f"must return real numbers, got dtype {array.dtype} at t = {t:.6g} s"
             )
-        array = array.astype(float, copy=False)
+        array = np.array(array, dtype=float)  # a copy: τ may be q or v itself
         if not np.all(np.isfinite(array)):
             raise TorqueLawError(
                 self.name, f"must return finite values, got {array.tolist()!r} at t = {t:.6g} s"
