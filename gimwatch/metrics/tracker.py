@@ -20,6 +20,14 @@ gap) ≤ rtol of each end (κ to about 2·rtol; default rtol = 1e-10).
   where λmin and λ₂ of a long chain differ by 0.07 % — and λmin = σ + 1/θ keeps its relative
   accuracy (κ ~ 1e11 at n = 400). s follows the observed motion of λmin (10× the last
   relative change, at least 1e-8).
+* **λmin is certified at every sample** on DeNOC's model: M − λ(1 − 100·rtol)·1 must factor
+  with positive pivots, i.e. no eigenvalue lies below the reported one (Ritz values lie above
+  λmin, so it is then within 100·rtol of λmin). A warm Ritz block localised in one branch of
+  a tree cannot see a lower mode that appears in another branch (the two smallest eigenvalues
+  cross), and Lanczos converges to the old mode with a small error estimate; the certificate
+  catches it, and λmin is recovered by Sylvester bisection on the shift, then Lanczos just
+  below it (``fallback = "cold"``). One O(n) factorization more per sample (10–15 % of a
+  sample's time at n = 100–1000).
 * **λmin**, on other providers (Pinocchio's ABA, test operators): Lanczos on M⁻¹·y with a
   block of 8 Ritz vectors (the smallest eigenvalues of a long chain cluster; Rayleigh–Ritz
   on the tracked cluster resolves crossings inside it).

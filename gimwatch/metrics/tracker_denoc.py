@@ -29,6 +29,10 @@ _SHIFT_MIN = 1e-8  # smallest relative shift margin s: above λmin's own toleran
 _ROUND = 12  # products per round of the cold start's shift refinement
 _APPROACH = 0.1  # each round moves σ to λ − 0.1 (λ − σ), λ the round's Ritz estimate
 _PROBES = 16  # seeded probe vectors, used in turn
+#: λmin is certified at every sample: M − λ(1 − CERTIFY·rtol)·1 must factor with positive
+#: pivots (Sylvester: no eigenvalue below that shift). Ritz values lie above λmin, so the
+#: reported λ is then within CERTIFY·rtol of λmin (relative), whatever Lanczos converged to.
+CERTIFY = 100.0
 
 
 @njit(cache=True)
@@ -205,6 +209,52 @@ class DenocEnds:
             sigma = trial
             starts = np.vstack([self._probe(), self._starts[1][:-1]])
 
+    def _certified(self, low: float, tracker) -> bool:
+        """Whether no eigenvalue of M lies below low·(1 − CERTIFY·rtol) (one O(n) factor)."""
+        return bool(fused.factor_shifted(low * (1.0 - CERTIFY * tracker.rtol), *self._model))
+
+    def _certified_cold_low(self, tracker) -> tuple[float, float, int, int]:
+        """λmin from a cold start, certified; (λmin, estimate, products, factorizations).
+
+        Raises:
+            ConditioningError: It did not converge, or an eigenvalue lies below it still
+                (the tracker then uses its dense fallback when it has one).
+        """
+        low, estimate, ok, used, factors = self._cold_low(tracker)
+        if not ok:
+            raise ConditioningError(f"λmin did not converge in {tracker.max_products} products")
+        factors += 1
+        if self._certified(low, tracker):
+            return low, estimate, used, factors
+        return self._bisected_low(low * (1.0 - CERTIFY * tracker.rtol), tracker, used, factors)
+
+    def _bisected_low(self, upper: float, tracker, used: int, factors: int):
+        """λmin below ``upper`` by Sylvester bisection, then Lanczos just below it.
+
+        The Ritz block and the probes may all miss the lowest mode (a crossing with a mode
+        localised elsewhere in the tree): pivot signs cannot. Bisection on the shift brackets
+        λmin in [lo, hi) to 1e-3 relative (a positive factor at lo, not at hi); Lanczos on
+        (M − lo·1)⁻¹, where λmin now dominates, gives it and its eigenvector for the next
+        warm start. Should that still not certify, the bisection goes on to the tolerance.
+        """
+        lo, hi, margin = 0.0, upper, CERTIFY * tracker.rtol
+        while hi - lo > 1e-3 * hi:
+            mid, factors = 0.5 * (lo + hi), factors + 1
+            lo, hi = (mid, hi) if fused.factor_shifted(mid, *self._model) else (lo, mid)
+        fused.factor_shifted(lo, *self._model)
+        starts = np.vstack([self._probe(), self._starts[1][:-1]])
+        theta, estimate, ok, spent = self._leading(
+            1, starts, lo, tracker.rtol, tracker.max_products, 1
+        )
+        used, factors = used + spent, factors + 2
+        low = lo + 1.0 / theta
+        if ok and low < hi and self._certified(low, tracker):
+            return low, estimate, used, factors
+        while hi - lo > 0.5 * margin * hi:
+            mid, factors = 0.5 * (lo + hi), factors + 1
+            lo, hi = (mid, hi) if fused.factor_shifted(mid, *self._model) else (lo, mid)
+        return hi, (hi - lo) / hi, used, factors
+
     def sample(self, q: np.ndarray, tracker) -> list:
         """[(λmax, products, fallback, estimate), (λmin, …), factorizations] at q.
 
@@ -223,7 +273,13 @@ class DenocEnds:
         top, e_top, _, n_top, low, e_low, _, n_low, _, factors, definite, cold = stats[:12].tolist()
         n_top, n_low, factors = int(n_top), int(n_low), int(factors)
         if not cold:
-            return [(top, n_top, "", e_top), (low, n_low, "", e_low), factors]
+            if self._certified(low, tracker):
+                return [(top, n_top, "", e_top), (low, n_low, "", e_low), factors + 1]
+            # an eigenvalue below the tracked one (a crossing the warm block missed)
+            low, e_low, n_more, more = self._certified_cold_low(tracker)
+            previous = self._state[1]
+            self._state[:3] = top, low, abs(low - previous) / low
+            return [(top, n_top, "", e_top), (low, n_low + n_more, "cold", e_low), factors + more]
         if not definite:
             raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
         fb_top = fb_low = ""
@@ -233,12 +289,11 @@ class DenocEnds:
             n_top += used
             if not ok:
                 raise ConditioningError(f"λmax did not converge in {tracker.max_products} products")
-        if stats[13]:
+        if stats[13] or not self._certified(low, tracker):
             fb_low = "cold"
-            low, e_low, ok, used, more = self._cold_low(tracker)
+            low, e_low, used, more = self._certified_cold_low(tracker)
             n_low, factors = n_low + used, factors + more
-            if not ok:
-                raise ConditioningError(f"λmin did not converge in {tracker.max_products} products")
+        factors += 1
         previous = self._state[1]
         self._state[:3] = top, low, abs(low - previous) / low
         return [(top, n_top, fb_top, e_top), (low, n_low, fb_low, e_low), factors]
@@ -248,8 +303,8 @@ class DenocEnds:
         model = self._model
         fused.kinematics(q, model[0], self._geometry, *model[1:5])
         top, e_top, ok_top, n_top = self._cold(0, 0.0, tracker.rtol, tracker.max_products)
-        low, e_low, ok_low, n_low, factors = self._cold_low(tracker)
-        if not (ok_top and ok_low):
+        low, e_low, n_low, factors = self._certified_cold_low(tracker)
+        if not ok_top:
             raise ConditioningError(
                 f"the κ tracker did not converge in {tracker.max_products} products "
                 "and has no dense fallback"
