@@ -7,6 +7,7 @@ import sys
 
 from gimwatch.cli._batch import expand_specs
 from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
+from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.metrics.analyze import analyze, choose_path
@@ -88,8 +89,9 @@ def run(args: argparse.Namespace) -> int:
         _notes(analysis)
         return _print_one(analysis, args)
     blocks: list[tuple[str, object, str]] = []
-    for i, spec in enumerate(specs, 1):
-        print(f"analyze: [{i}/{len(specs)}] {spec}", file=sys.stderr)
+    progress = ItemProgress("analyze", len(specs))
+    for spec in specs:
+        progress.start(spec)
         try:
             analysis = _analysis(spec, args)
         except GimwatchError as exc:
@@ -97,6 +99,7 @@ def run(args: argparse.Namespace) -> int:
             continue
         _notes(analysis)
         blocks.append((spec, analysis, ""))
+    progress.close()
     _print_batch(blocks, args)
     return 2 if any(reason for _, _, reason in blocks) else 0
 
