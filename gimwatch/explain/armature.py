@@ -33,6 +33,7 @@ import pinocchio as pin
 from scipy.optimize import linprog
 
 from gimwatch.errors import ConditioningError, InputError
+from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = ["ArmaturePlan", "minimal_armature"]
@@ -160,7 +161,7 @@ def minimal_armature(
     qs = np.atleast_2d(np.asarray(configurations, dtype=float))
     qs = np.array([as_configuration(robot, q) for q in qs])
     model, data = robot.model, robot.new_data()
-    Ms = [np.array(pin.crba(model, data, q)) for q in qs]
+    Ms = [check_robot_gim(robot, np.array(pin.crba(model, data, q))) for q in qs]
     if per_joint:
         added, lower, iterations = _least_total(Ms, target, rtol)
     else:

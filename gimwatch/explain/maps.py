@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.metrics.analyze import choose_path
+from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.metrics.linear_analysis import LINEAR_METRICS
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, parse_chain_spec
@@ -33,11 +34,14 @@ from gimwatch.suggest import did_you_mean
 from gimwatch.survey.sweep import Task, run_sweep
 
 __all__ = [
+    "CHUNK_POINTS",
     "MAX_GRID",
     "ConditioningMap",
+    "check_metrics",
     "conditioning_map",
     "map_axes",
     "metrics_at",
+    "robot_coordinates",
     "scalar_metrics",
 ]
 
@@ -54,7 +58,8 @@ def scalar_metrics(path: str) -> tuple[str, ...]:
     return tuple(name for name, cls in METRICS.items() if not cls.vector)
 
 
-def _check_metrics(metrics: Sequence[str], path: str) -> tuple[str, ...]:
+def check_metrics(metrics: Sequence[str], path: str) -> tuple[str, ...]:
+    """``metrics`` if each is a map metric of ``path``, else an InputError naming it."""
     allowed = scalar_metrics(path)
     for name in metrics:
         if name not in allowed:
@@ -84,6 +89,17 @@ def _linear_model(spec: str):
     return model, robot.name
 
 
+def robot_coordinates(spec: str, path: str) -> tuple[str, list[str]]:
+    """(robot name, names of the q coordinates in order) on ``path``."""
+    if path == "denoc":
+        model, name = _linear_model(spec)
+        return name, list(model.joint_names)
+    from gimwatch.output.figures import joint_coordinate_units
+
+    robot = _robot(spec)
+    return robot.name, joint_coordinate_units(robot.model)[0]
+
+
 def metrics_at(spec: str, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -> np.ndarray:
     """The metrics at each configuration of ``qs`` (K, nq): an array (len(metrics), K).
 
@@ -101,6 +117,9 @@ def metrics_at(spec: str, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -
     robot = _robot(spec)
     data = robot.new_data()
     Ms = np.array([pin.crba(robot.model, data, q) for q in qs])
+    diagonal = np.diagonal(Ms, axis1=1, axis2=2)
+    for row in diagonal[np.any(~(diagonal > 0), axis=1)][:1]:  # M singular: say which joints
+        check_massless(row, robot.dof_names, name=robot.name, source=robot.source)
     rest = []
     for i, metric in enumerate(metrics):
         if metric == "kappa":
@@ -231,7 +250,8 @@ def conditioning_map(
         q: The configuration of the other joints (default: neutral), length nq.
         metrics: Scalar metrics (:func:`scalar_metrics`).
         backend: ``auto``, ``crba`` or ``denoc`` (as ``analyze``).
-        workers: Local processes (1: this process); ``scheduler``: a Dask scheduler or "local".
+        workers: Local processes (1: this process).
+        scheduler: A Dask scheduler address or ``"local"`` (then ``workers`` is ignored).
         progress: Called with the fraction of chunks done.
     """
     if (
@@ -241,7 +261,7 @@ def conditioning_map(
     ):
         raise InputError("--grid", f"an integer from 2 to {MAX_GRID}", grid)
     path = choose_path(spec, backend=backend)
-    metrics = _check_metrics(list(metrics), path)
+    metrics = check_metrics(list(metrics), path)
     name, axes, units, limits, base_q = map_axes(spec, path, joints)
     if ranges is not None:
         limits = [tuple(map(float, r)) for r in ranges]

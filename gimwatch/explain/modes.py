@@ -21,6 +21,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.explain.bodies import body_energies, body_names, body_split, dof_joint_ranges
+from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = ["GimModes", "Mode", "gim_modes"]
@@ -99,7 +100,7 @@ def gim_modes(robot: Robot, q: npt.ArrayLike | None = None) -> GimModes:
     model = robot.model
     q = pin.neutral(model) if q is None else as_configuration(robot, q)
     data = robot.new_data()
-    M = np.array(pin.crba(model, data, q))
+    M = check_robot_gim(robot, np.array(pin.crba(model, data, q)))
     w, vectors = np.linalg.eigh(M)
     split = body_split(robot, q, data=data)
     joints = dof_joint_ranges(robot)

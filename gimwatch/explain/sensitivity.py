@@ -34,6 +34,7 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.explain.bodies import BodySplit, body_names, body_split, dof_joint_ranges
+from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = [
@@ -217,7 +218,7 @@ def kappa_sensitivities(
     model = robot.model
     q = pin.neutral(model) if q is None else as_configuration(robot, q)
     data = robot.new_data()
-    M = np.array(pin.crba(model, data, q))
+    M = check_robot_gim(robot, np.array(pin.crba(model, data, q)))
     w, vectors = np.linalg.eigh(M)
     low, high = _clusters(w, cluster_rtol)
     V = np.hstack([vectors[:, :low], vectors[:, w.size - high :]])
