@@ -62,6 +62,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; fixed "
         f"base); auto: denoc above nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
     )
+    # --explain (issue 25): the modes of λmin and λmax at each configuration, dense path only
+    parser.add_argument(
+        "--explain",
+        action="store_true",
+        help="also explain kappa: the joints and bodies of the lambda_min and lambda_max modes",
+    )
     parser.add_argument(
         "--metrics",
         help="comma-separated subset of kappa,diagonal_ratio,pivot_ratio_backward to compute "
@@ -80,6 +86,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
     if linear and args.floating:
         raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
+    if args.explain and (linear or args.csv):
+        raise InputError("--explain", "used on the dense path, without --csv", True)
     analysis = analyze(
         args.robot,
         args.q,
@@ -102,6 +110,10 @@ def run(args: argparse.Namespace) -> int:
         )
     base = "floating" if args.floating else "fixed"
     records = [{"config": i, **r.to_dict()} for i, r in enumerate(results)]
+    modes = _explained(args, results) if args.explain else None
+    if modes is not None:
+        for record, mode in zip(records, modes, strict=True):
+            record["modes"] = mode.to_dict()
     if args.json:
         header = {"robot": first.robot, "nv": first.nv, "base": base, "method": first.method}
         if analysis.placeholder_limits:  # random draws replaced these joints' limits
@@ -139,4 +151,19 @@ def run(args: argparse.Namespace) -> int:
         for i, r in enumerate(results)
     ]
     print(table(headers, rows))
+    if modes is not None:
+        from gimwatch.cli.explain import mode_lines
+
+        for i, mode in enumerate(modes):
+            for line in mode_lines(mode):
+                print(f"config {i}: {line}")
     return 0
+
+
+def _explained(args: argparse.Namespace, results) -> list:
+    """The modes of λmin and λmax at each analysed configuration (``--explain``)."""
+    from gimwatch.explain.modes import gim_modes
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot(args.robot, floating=args.floating, max_nv=DATA_NV_LIMIT)
+    return [gim_modes(robot, r.q) for r in results]

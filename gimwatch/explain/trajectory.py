@@ -60,12 +60,12 @@ def read_trajectory_csv(
         raise InputError("--trajectory", "a readable CSV file", str(path), hint=str(exc)) from None
     if not rows:
         raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
-    has_time = rows[0][1][0].strip().lower() in _TIME
-    header = rows[0][1]
+    header = [cell.strip() for cell in rows[0][1]]
+    has_time = header[0].lower() in _TIME
     try:
-        float(header[-1])
-    except ValueError:  # a header row
-        columns = [c.strip() for c in header[1:]] if has_time else [c.strip() for c in header]
+        float(header[0])
+    except ValueError:  # a first cell that is no number: a header row
+        columns = header[1:] if has_time else header
         if columns != list(names):
             raise InputError(
                 f"{path}:1",
