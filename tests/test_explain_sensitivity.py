@@ -218,9 +218,9 @@ def test_planar_chain_rod_derivatives_match_mpmath():
                 up[which] = [x + h * (i == k) for i, x in enumerate(vals[which])]
                 down[which] = [x - h * (i == k) for i, x in enumerate(vals[which])]
                 Mp = PlanarChainReference(chain_spec(4, mass_kg=up["m"], length_m=up["l"])).gim(q)
-                Mm = PlanarChainReference(
-                    chain_spec(4, mass_kg=down["m"], length_m=down["l"])
-                ).gim(q)
+                Mm = PlanarChainReference(chain_spec(4, mass_kg=down["m"], length_m=down["l"])).gim(
+                    q
+                )
                 ref = float(_mp_kappa_derivative(M, (Mp - Mm) / (2 * h)))
                 assert exact == pytest.approx(ref, rel=1e-10), f"rod {k} d{which}"
 

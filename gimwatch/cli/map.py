@@ -41,7 +41,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--metrics", default="kappa,diagonal_ratio", help="comma-separated registry metrics"
     )
-    parser.add_argument("--backend", choices=("auto", "crba", "denoc"), default="auto")
+    parser.add_argument(
+        "--backend",
+        choices=("auto", "crba", "denoc"),
+        default="auto",
+        help="crba: dense M; denoc: the O(n) path; auto: denoc for chains beyond Pinocchio's Data",
+    )
     parser.add_argument("--workers", type=positive_int, default=1, metavar="N", help="processes")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="Dask: 'local' or tcp://host:port")
     parser.add_argument("-o", "--output", required=True, metavar="DIR", help="results folder")
