@@ -9,8 +9,10 @@ finished rows when interrupted (the others are NaN). Two paths, as ``analyze``:
 * dense (``crba``): Pinocchio's CRBA per point; κ and δ of a chunk from one batched
   eigen-solve / diagonal read, other scalar metrics through the registry on the formed M;
 * O(n) (``denoc``, chains beyond Pinocchio's Data, or asked for): DeNOC's linear-time state
-  per point (:func:`gimwatch.metrics.linear_analysis.analyze_linear`, no M formed), for the
-  metrics of that path (κ by Lanczos on M·x and M⁻¹·x, δ, the backward pivot ratio).
+  per point (:func:`gimwatch.metrics.linear_analysis.analyze_linear`, no M formed) for δ and
+  the backward pivot ratio, and κ by the κ tracker (:mod:`gimwatch.metrics.tracker`,
+  warm-started Lanczos, relative tolerance 1e-10 per end) along the chunk's points, visited
+  in serpentine order so that each starts from its neighbour's eigenvectors.
 """
 
 from __future__ import annotations
@@ -89,6 +91,11 @@ def _linear_model(spec: str):
     return model, robot.name
 
 
+@functools.lru_cache(maxsize=2)
+def _lean(spec: str):
+    return _linear_model(spec)[0].lean()
+
+
 def robot_coordinates(spec: str, path: str) -> tuple[str, list[str]]:
     """(robot name, names of the q coordinates in order) on ``path``."""
     if path == "denoc":
@@ -108,11 +115,17 @@ def metrics_at(spec: str, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -
     out = np.full((len(metrics), len(qs)), np.nan)
     if path == "denoc":
         from gimwatch.metrics.linear_analysis import analyze_linear
+        from gimwatch.metrics.tracker import track_kappa
 
         model, name = _linear_model(spec)
-        for k, q in enumerate(qs):
-            record = analyze_linear(model, q, name=name, metrics=metrics)
-            out[:, k] = [getattr(record, metric) for metric in metrics]
+        others = tuple(m for m in metrics if m != "kappa") or ("diagonal_ratio",)
+        for k, q in enumerate(qs):  # δ always: it checks that every coordinate moves mass
+            record = analyze_linear(model, q, name=name, metrics=others)
+            for i, metric in enumerate(metrics):
+                if metric != "kappa":
+                    out[i, k] = getattr(record, metric)
+        if "kappa" in metrics:  # warm-started from point to point, O(n) each (metrics/tracker)
+            out[metrics.index("kappa")] = [s.kappa for s in track_kappa(_lean(spec), qs)]
         return out
     robot = _robot(spec)
     data = robot.new_data()
@@ -220,11 +233,20 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
 
 
 def _grid_chunk(spec, path, axes, base_q, x, y_rows, metrics) -> np.ndarray:
-    """Metrics over rows ``y_rows`` × all of ``x``: an array (len(metrics), rows, nx)."""
-    qs = np.repeat(np.asarray(base_q, dtype=float)[None, :], len(y_rows) * len(x), axis=0)
-    qs[:, axes[0]] = np.tile(x, len(y_rows))
-    qs[:, axes[1]] = np.repeat(y_rows, len(x))
-    return metrics_at(spec, path, qs, metrics).reshape(len(metrics), len(y_rows), len(x))
+    """Metrics over rows ``y_rows`` × all of ``x``: an array (len(metrics), rows, nx).
+
+    Rows are visited back and forth (serpentine), so that consecutive configurations are
+    neighbours: the κ tracker of the O(n) path warm-starts from the previous point.
+    """
+    rows, nx = len(y_rows), len(x)
+    xs = np.tile(x, rows).reshape(rows, nx)
+    xs[1::2] = xs[1::2, ::-1]
+    qs = np.repeat(np.asarray(base_q, dtype=float)[None, :], rows * nx, axis=0)
+    qs[:, axes[0]] = xs.ravel()
+    qs[:, axes[1]] = np.repeat(y_rows, nx)
+    values = metrics_at(spec, path, qs, metrics).reshape(len(metrics), rows, nx)
+    values[:, 1::2] = values[:, 1::2, ::-1]
+    return values
 
 
 def conditioning_map(
