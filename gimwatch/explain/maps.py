@@ -44,6 +44,7 @@ __all__ = [
     "map_axes",
     "metrics_at",
     "robot_coordinates",
+    "run_chunks",
     "scalar_metrics",
 ]
 
@@ -232,6 +233,39 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
     )
 
 
+def run_chunks(
+    tasks: Sequence[Task],
+    starts: Sequence[int],
+    shape: tuple[int, ...],
+    metrics: Sequence[str],
+    *,
+    workers: int | None,
+    scheduler: str | None,
+    progress: Callable[[float], None] | None,
+) -> tuple[dict[str, np.ndarray], bool]:
+    """Run chunk tasks (each returns (len(metrics), k, ...)) into arrays of ``shape`` per metric.
+
+    Chunk ``i`` fills rows ``starts[i]`` onwards; rows of unfinished chunks stay NaN.
+
+    Returns:
+        The arrays by metric, and whether Ctrl-C interrupted the sweep.
+    """
+    done = [0]
+
+    def tick(_: int) -> None:
+        done[0] += 1
+        if progress is not None:
+            progress(done[0] / len(tasks))
+
+    outcome = run_sweep(tasks, workers=workers, scheduler=scheduler, progress=tick)
+    values = {m: np.full(shape, np.nan) for m in metrics}
+    for position, chunk in outcome.results.items():
+        s = starts[position]
+        for i, metric in enumerate(metrics):
+            values[metric][s : s + chunk.shape[1]] = chunk[i]
+    return values, outcome.interrupted
+
+
 def _grid_chunk(spec, path, axes, base_q, x, y_rows, metrics) -> np.ndarray:
     """Metrics over rows ``y_rows`` × all of ``x``: an array (len(metrics), rows, nx).
 
@@ -308,19 +342,15 @@ def conditioning_map(
         )
         for s in starts
     ]
-    done = [0]
-
-    def tick(_: int) -> None:
-        done[0] += 1
-        if progress is not None:
-            progress(done[0] / len(tasks))
-
-    outcome = run_sweep(tasks, workers=workers, scheduler=scheduler, progress=tick)
-    values = {m: np.full((grid, grid), np.nan) for m in metrics}
-    for position, chunk in outcome.results.items():
-        s = starts[position]
-        for i, metric in enumerate(metrics):
-            values[metric][s : s + chunk.shape[1]] = chunk[i]
+    values, interrupted = run_chunks(
+        tasks,
+        starts,
+        (grid, grid),
+        metrics,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+    )
     return ConditioningMap(
         robot=name,
         joints=(joints[0], joints[1]),
@@ -330,5 +360,5 @@ def conditioning_map(
         base_q=np.asarray(base_q, dtype=float),
         path=path,
         values=values,
-        interrupted=outcome.interrupted,
+        interrupted=interrupted,
     )

@@ -18,9 +18,15 @@ from pathlib import Path
 import numpy as np
 
 from gimwatch.errors import InputError
-from gimwatch.explain.maps import CHUNK_POINTS, check_metrics, metrics_at, robot_coordinates
+from gimwatch.explain.maps import (
+    CHUNK_POINTS,
+    check_metrics,
+    metrics_at,
+    robot_coordinates,
+    run_chunks,
+)
 from gimwatch.metrics.analyze import choose_path
-from gimwatch.survey.sweep import Task, run_sweep
+from gimwatch.survey.sweep import Task
 
 __all__ = ["MAX_SAMPLES", "TrajectoryMetrics", "read_trajectory_csv", "trajectory_metrics"]
 
@@ -124,24 +130,14 @@ def trajectory_metrics(
     time, qs = read_trajectory_csv(trajectory, coordinates)
     starts = range(0, len(qs), CHUNK_POINTS)
     tasks = [Task(metrics_at, (spec, path, qs[s : s + CHUNK_POINTS], metrics)) for s in starts]
-    done = [0]
-
-    def tick(_: int) -> None:
-        done[0] += 1
-        if progress is not None:
-            progress(done[0] / len(tasks))
-
-    outcome = run_sweep(tasks, workers=workers, scheduler=scheduler, progress=tick)
-    values = {m: np.full(len(qs), np.nan) for m in metrics}
-    for position, chunk in outcome.results.items():
-        s = starts[position]
-        for i, metric in enumerate(metrics):
-            values[metric][s : s + chunk.shape[1]] = chunk[i]
+    values, interrupted = run_chunks(
+        tasks, starts, (len(qs),), metrics, workers=workers, scheduler=scheduler, progress=progress
+    )
     return TrajectoryMetrics(
         robot=name,
         time=time,
         q=qs,
         path=path,
         values=values,
-        interrupted=outcome.interrupted,
+        interrupted=interrupted,
     )
