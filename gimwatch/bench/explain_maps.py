@@ -1,6 +1,6 @@
 """Section ``explain``: what a conditioning map costs, dense (7-DoF arm) and O(n) (long chain).
 
-Each case is one :func:`gimwatch.explain.maps.conditioning_map` of κ and δ, timed whole (wall
+Each case is one `gimwatch.explain.maps.conditioning_map` of κ and δ, timed whole (wall
 clock, robot loading included, worker start-up included when ``workers`` > 1), once: a map is
 a one-shot job, and its first run is what a user waits for.
 
@@ -34,7 +34,7 @@ COLUMNS = ("robot", "nv", "path", "grid", "points", "workers", "seconds", "us_pe
 
 
 def measure(context: BenchContext) -> Table:
-    """One row per case of :data:`CASES`."""
+    """One row per case of `CASES`."""
     table = Table("explain", COLUMNS)
     for spec, joints, grid, quick_grid, path, workers in CASES:
         if context.quick:  # a smoke run: in this process, no worker start-up

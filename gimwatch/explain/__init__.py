@@ -1,11 +1,11 @@
 """Why M(q) is ill-conditioned, where, and what would fix it.
 
-* :func:`gim_modes` — the eigenvectors of λmin and λmax in named joints and loaded bodies;
-* :func:`kappa_sensitivities` — exact ∂κ/∂p and elasticities for every inertial parameter,
+* `gim_modes` — the eigenvectors of λmin and λmax in named joints and loaded bodies;
+* `kappa_sensitivities` — exact ∂κ/∂p and elasticities for every inertial parameter,
   link offset and armature;
-* :func:`conditioning_map` / :func:`trajectory_metrics` — κ, δ or any scalar registry metric
+* `conditioning_map` / `trajectory_metrics` — κ, δ or any scalar registry metric
   over a grid of two joints or along a trajectory file;
-* :func:`minimal_armature` — the least armature that brings κ under a target, and its price.
+* `minimal_armature` — the least armature that brings κ under a target, and its price.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 ``write_map`` writes ``map.csv`` (one row per grid point: both joints and every metric),
 ``map.json`` (axes, units, base configuration) and one ``map_<metric>.png`` heat map per
 metric; ``write_trajectory_metrics`` writes ``trajectory.csv`` and ``trajectory.png``. All
-go through a :class:`~gimwatch.output.folders.ResultsFolder`: a failed or interrupted run
+go through a `ResultsFolder`: a failed or interrupted run
 never leaves half a folder, and never replaces a good one.
 """
 

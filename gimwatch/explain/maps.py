@@ -1,16 +1,16 @@
 """Conditioning maps: κ, δ or any scalar registry metric over a grid of two joints, or along a path.
 
 A map fixes every joint but two at a base configuration and sweeps those two over a grid.
-The grid is cut into row chunks, each a :class:`~gimwatch.survey.sweep.Task`, so that a large
+The grid is cut into row chunks, each a `Task`, so that a large
 map runs in this process, on local processes or on a Dask cluster (the survey's
-:func:`~gimwatch.survey.sweep.run_sweep`), shows progress chunk by chunk, and keeps the
+`run_sweep`), shows progress chunk by chunk, and keeps the
 finished rows when interrupted (the others are NaN). Two paths, as ``analyze``:
 
 * dense (``crba``): Pinocchio's CRBA per point; κ and δ of a chunk from one batched
   eigen-solve / diagonal read, other scalar metrics through the registry on the formed M;
 * O(n) (``denoc``, chains beyond Pinocchio's Data, or asked for): DeNOC's linear-time state
-  per point (:func:`gimwatch.metrics.linear_analysis.analyze_linear`, no M formed) for δ and
-  the backward pivot ratio, and κ by the κ tracker (:mod:`gimwatch.metrics.tracker`,
+  per point (`gimwatch.metrics.linear_analysis.analyze_linear`, no M formed) for δ and
+  the backward pivot ratio, and κ by the κ tracker (`gimwatch.metrics.tracker`,
   warm-started Lanczos, relative tolerance 1e-10 per end) along the chunk's points, visited
   in serpentine order so that each starts from its neighbour's eigenvectors.
 """
@@ -301,10 +301,10 @@ def conditioning_map(
     Args:
         spec: The robot (``chain:N``, a URDF path, an example-robot-data name).
         joints: The two joints to sweep, by name (x then y).
-        grid: Points per side, 2 to :data:`MAX_GRID`.
+        grid: Points per side, 2 to `MAX_GRID`.
         ranges: (lower, upper) per joint (default: its limits; ±π rad or ±1 m when none).
         q: The configuration of the other joints (default: neutral), length nq.
-        metrics: Scalar metrics (:func:`scalar_metrics`).
+        metrics: Scalar metrics (`scalar_metrics`).
         backend: ``auto``, ``crba`` or ``denoc`` (as ``analyze``).
         workers: Local processes (1: this process).
         scheduler: A Dask scheduler address or ``"local"`` (then ``workers`` is ignored).

@@ -5,7 +5,7 @@ For a configuration q with ``M v = λ v`` (unit v):
 * participation of joint j: ``Σ_{i ∈ j} v_i²`` over its velocity coordinates; they sum to 1;
 * energy share of body b: ``½ (J_b v)ᵀ I_b (J_b v) / ½ vᵀ (M − diag(a)) v``, body b's part of
   the mode's kinetic energy (``M = Σ_b J_bᵀ I_b J_b + diag(a)``, see
-  :mod:`gimwatch.explain.bodies`); the shares sum to 1, and the armature's part
+  `gimwatch.explain.bodies`); the shares sum to 1, and the armature's part
   ``vᵀ diag(a) v / vᵀ M v`` is reported apart.
 
 λmin's mode is the motion M resists least (a light distal body moved alone), λmax's the one it

@@ -106,7 +106,7 @@ def parameter_table(robot: Robot) -> list[tuple[str, str, float, str]]:
 
 
 def _projected_derivatives(model: pin.Model, split: BodySplit, V: np.ndarray) -> np.ndarray:
-    """Vᵀ (∂M/∂p) V for every parameter, in :func:`parameter_table`'s order: (P, k, k)."""
+    """Vᵀ (∂M/∂p) V for every parameter, in `parameter_table`'s order: (P, k, k)."""
     nb = split.jacobian_local.shape[0]
     out = []
     local = np.einsum("bij,jk->bik", split.jacobian_local, V)  # J_b V, body frame
@@ -206,7 +206,7 @@ def kappa_sensitivities(
     *,
     cluster_rtol: float = CLUSTER_RTOL,
 ) -> KappaSensitivities:
-    """∂κ/∂p and ∂ log κ/∂ log p for every parameter of :func:`parameter_table` at ``q``.
+    """∂κ/∂p and ∂ log κ/∂ log p for every parameter of `parameter_table` at ``q``.
 
     Args:
         robot: The robot (dense path: Pinocchio's Data is built).

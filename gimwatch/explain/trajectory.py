@@ -4,7 +4,7 @@ The file has one row per sample and ``nq`` numeric columns in Pinocchio's q orde
 row of column names is allowed (then the names must be the robot's coordinate names, e.g.
 ``shoulder_pan_joint``, or ``t`` plus them: a first ``t``/``time`` column is kept as time).
 Every error names the file, the line and what is wrong. The metrics run through
-:func:`gimwatch.explain.maps.metrics_at` in chunks, as maps do.
+`gimwatch.explain.maps.metrics_at` in chunks, as maps do.
 """
 
 from __future__ import annotations
