@@ -25,6 +25,9 @@ Pinocchio model is built from the *compiled* ``MjModel`` (body poses, inertias w
 
 from __future__ import annotations
 
+import re
+import warnings
+
 import numpy as np
 import pinocchio as pin
 
@@ -59,20 +62,40 @@ def compile_mjcf(path: str, *, floating: bool = False):
         URDFError: MuJoCo refuses the file (its message, with the element, is kept).
     """
     mujoco = import_mujoco()
+    # MuJoCo's warnings go to a handler of ours: its default one prints them and writes
+    # MUJOCO_LOG.TXT into the working folder. Its solver's Python warnings on a model that
+    # gimwatch then refuses (an axis that cannot be normalised) are not the user's concern.
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda message: None)
     try:
-        with captured_c_output(1), captured_c_output(2):  # MuJoCo prints its warnings
+        with captured_c_output(1), captured_c_output(2), warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
             spec = mujoco.MjSpec.from_file(str(path))
             if floating:
                 _add_free_joint(spec, path)
             return spec.compile()
     except ValueError as exc:
         raise URDFError(str(path), f"MuJoCo refuses this MJCF: {mujoco_message(exc)}") from None
+    finally:
+        mujoco.set_mju_user_warning(previous)
+
+
+_ELEMENT = re.compile(r"\s*Element (?:name )?'([^']*)'(?:, id \d+)?, line (\d+)\s*$")
+_PARSE = re.compile(r"XML parse error \d+: Error=(\w+).*Line number=(\d+)(?:: (.*))?")
 
 
 def mujoco_message(exc: Exception) -> str:
-    """MuJoCo's error text on one line (it names the element and the line)."""
+    """MuJoCo's error text on one line, ending with the element and line it names."""
     lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
     text = " ".join(lines).replace("XML Error: ", "").replace("Error: ", "")
+    parse = _PARSE.search(text)
+    if parse:
+        where = f", {parse.group(3)}" if parse.group(3) else ""
+        return f"not well-formed XML ({parse.group(1)} at line {parse.group(2)}{where})"
+    element = _ELEMENT.search(text)
+    if element:
+        name = f"element '{element.group(1)}', " if element.group(1) else ""
+        text = f"{text[: element.start()]} ({name}line {element.group(2)})"
     return text or type(exc).__name__
 
 

@@ -2,8 +2,9 @@
 
 1. A linear scan of the file and of the files it includes (no parser) refuses, before MuJoCo
    runs, more bytes, ``<body>`` elements or body nesting than gimwatch reads (the URDF
-   budgets: :data:`~gimwatch.model.robots.MAX_URDF_BYTES`, ``$GIMWATCH_MAX_LINKS`` bodies,
-   :data:`~gimwatch.model.robots.MAX_TREE_DEPTH` levels).
+   budgets: :data:`~gimwatch.model.robots.MAX_URDF_BYTES`, ``$GIMWATCH_MAX_LINKS`` bodies)
+   and bodies nested deeper than :data:`MAX_BODY_DEPTH` (MuJoCo's XML reader stops at about
+   500 nested elements).
 2. MuJoCo compiles the file; a refusal is one line with MuJoCo's message (element, line).
 3. :func:`~gimwatch.model.mjcf_compiled.build_pinocchio_model` builds the robot; a moving
    subtree without mass is refused; what changes MuJoCo's dynamics but not M (equality
@@ -24,7 +25,11 @@ from gimwatch.errors import URDFError, URDFWarning
 from gimwatch.model.mjcf_compiled import build_pinocchio_model, compile_mjcf, subtree_joints
 from gimwatch.model.urdf_text import max_links
 
-__all__ = ["check_mjcf_budget", "read_mjcf", "urdf_of_model"]
+__all__ = ["MAX_BODY_DEPTH", "check_mjcf_budget", "read_mjcf", "urdf_of_model"]
+
+#: The deepest nesting of ``<body>`` read (tinyxml2, MuJoCo's XML reader, refuses about 500
+#: nested elements with a less clear message).
+MAX_BODY_DEPTH = 400
 
 
 def _attribute(tag: str, key: str) -> str | None:
@@ -46,7 +51,7 @@ def check_mjcf_budget(path: str) -> None:
     Raises:
         URDFError: Too many bytes, bodies or levels, naming the file and the limit.
     """
-    from gimwatch.model.robots import MAX_TREE_DEPTH, MAX_URDF_BYTES
+    from gimwatch.model.robots import MAX_URDF_BYTES
 
     folder = Path(path).parent
     limit, bodies, total = max_links(), 0, 0
@@ -81,9 +86,9 @@ def check_mjcf_budget(path: str) -> None:
                     )
                 if not tag.endswith("/"):
                     depth += 1
-                    if depth > MAX_TREE_DEPTH:
+                    if depth > MAX_BODY_DEPTH:
                         raise URDFError(
-                            path, f"nests <body> more than {MAX_TREE_DEPTH} levels deep"
+                            path, f"nests <body> more than {MAX_BODY_DEPTH} levels deep"
                         )
             elif name == "/body":
                 depth -= 1
@@ -103,13 +108,46 @@ def _ignored_dynamics(mj_model) -> str:
     return ", ".join(parts)
 
 
-def _check_masses(mj_model, joints: list[int], source: str) -> None:
+def _name(mj_model, kind: str, index: int) -> str:
     import mujoco
 
+    obj = mujoco.mjtObj.mjOBJ_BODY if kind == "body" else mujoco.mjtObj.mjOBJ_JOINT
+    return mujoco.mj_id2name(mj_model, obj, index) or f"{kind}{index}"
+
+
+#: Beyond this size (m, kg, kg m²) a product in M(q) (m·r², sums over bodies) may overflow.
+MAX_MAGNITUDE = 1e100
+
+
+def _check_values(mj_model, joints: list[int], source: str) -> None:
+    """Refuse compiled values that would make M(q) inf or NaN, naming the body or joint."""
+    for j in joints:
+        axis = np.asarray(mj_model.jnt_axis[j], dtype=float)
+        if mj_model.jnt_type[j] >= 2 and not abs(float(np.linalg.norm(axis)) - 1.0) < 1e-9:
+            raise URDFError(
+                source,
+                "<joint axis> cannot be normalised (a component overflows or underflows)",
+                element=f"joint {_name(mj_model, 'joint', j)!r}",
+            )
+    fields = ("body_pos", "body_ipos", "body_mass", "body_inertia")
+    for b in range(1, mj_model.nbody):
+        for key in fields:
+            values = np.asarray(getattr(mj_model, key)[b], dtype=float)
+            if not np.all(np.abs(values) < MAX_MAGNITUDE):
+                what = key.removeprefix("body_")
+                raise URDFError(
+                    source,
+                    f"its compiled {what} {values.tolist()} is not finite or beyond "
+                    f"{MAX_MAGNITUDE:g} (M(q) would overflow)",
+                    element=f"body {_name(mj_model, 'body', b)!r}",
+                )
+
+
+def _check_masses(mj_model, joints: list[int], source: str) -> None:
     for j in joints:
         b = int(mj_model.jnt_bodyid[j])
         if not float(mj_model.body_subtreemass[b]) > 0:
-            name = mujoco.mj_id2name(mj_model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
+            name = _name(mj_model, "body", b)
             raise URDFError(
                 source,
                 "moves no mass (it and its children have zero mass); give it a <geom> or an "
@@ -130,6 +168,7 @@ def read_mjcf(path: str, *, floating: bool = False, body: str = "", armature: bo
     check_mjcf_budget(path)
     mj_model = compile_mjcf(path, floating=floating)
     joints = subtree_joints(mj_model, body, path)
+    _check_values(mj_model, joints, path)
     _check_masses(mj_model, joints, path)
     model, joint_ids = build_pinocchio_model(mj_model, body=body, armature=armature, source=path)
     _set_limits(model, mj_model, joint_ids)
