@@ -128,3 +128,65 @@ def test_crosscheck_compares_denoc_pinocchio_and_mujoco(path):
     assert result.mujoco_gim_rel_err < 1e-13
     if robot.urdf_xml:
         assert result.gim_rel_err < 1e-13 and result.qdd_rel_err is not None
+
+
+@pytest.mark.parametrize("stem", ["humanoid", "hopper"])
+def test_the_watch_on_mujoco_and_on_the_robot_agree(stem):
+    """Watch.from_mujoco at MuJoCo's qpos == Watch(robot) at the mapped q (κ and δ)."""
+    from gimwatch.metrics.watch import Watch
+
+    path = FEATURES / f"{stem}.xml"
+    robot = _load(path)
+    mj_model = mujoco.MjModel.from_xml_path(str(path))
+    mj_model.tendon_armature[:] = 0  # gimwatch leaves tendon armature out (warned)
+    on_mujoco = Watch.from_mujoco(mj_model, mujoco.MjData(mj_model), robot=robot)
+    on_robot = Watch(robot, ("kappa", "diagonal_ratio"))
+    for t, q in enumerate(random_configurations(robot, 3, seed=4)):
+        on_mujoco.sample(t, qpos_from_q(robot.model, q))
+        on_robot.sample(t, q)
+    for name in ("kappa", "diagonal_ratio"):
+        np.testing.assert_allclose(on_mujoco.array(name), on_robot.array(name), rtol=1e-10)
+
+
+def _qpos_text(stem):
+    robot = _load(FEATURES / f"{stem}.xml")
+    qpos = qpos_from_q(robot.model, random_configurations(robot, 1, seed=9)[0])
+    return robot, qpos
+
+
+@pytest.mark.parametrize("stem", ["humanoid", "hopper"])
+def test_analyze_q_takes_mujocos_qpos(stem, capsys):
+    import json
+
+    from gimwatch.cli import main
+
+    robot, qpos = _qpos_text(stem)
+    argv = ["analyze", str(FEATURES / f"{stem}.xml"), "--json", "--q", *(repr(float(x)) for x in qpos)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", URDFWarning)
+        assert main(argv) == 0
+    record = json.loads(capsys.readouterr().out)["configurations"][0]
+    reference, _ = _mujoco_reference(FEATURES / f"{stem}.xml", qpos)
+    eigenvalues = np.linalg.eigvalsh(reference)
+    assert record["kappa"] == pytest.approx(eigenvalues[-1] / eigenvalues[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("stem", ["humanoid", "hopper"])
+def test_simulate_and_survey_run_on_mjcf(stem, tmp_path, capsys):
+    from gimwatch.cli import main
+
+    robot, qpos = _qpos_text(stem)
+    scene = tmp_path / "scene.toml"
+    scene.write_text(
+        f'robot = "{FEATURES / f"{stem}.xml"}"\nq = {list(map(float, qpos))}\n'
+        "duration = 0.1\nsample = 0.05\n[effects.gravity]\nvector = [0, 0, -9.81]\n"
+        '[watch]\nmetrics = ["kappa", "diagonal_ratio"]\n'
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", URDFWarning)
+        assert main(["simulate", str(scene), "-o", str(tmp_path / "run")]) == 0
+        first = np.load(tmp_path / "run" / "trajectory.npz")["q"][0]
+        np.testing.assert_allclose(first, q_from_qpos(robot.model, qpos), atol=1e-12)
+        path = str(FEATURES / f"{stem}.xml")
+        assert main(["survey", path, "--samples", "3", "-o", str(tmp_path / "survey")]) == 0
+    assert f"{robot.nv}" in (tmp_path / "survey" / "report.md").read_text()

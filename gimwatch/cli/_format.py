@@ -65,3 +65,19 @@ def non_negative_int(text: str) -> int:
     if value is None or value < 0:
         raise ArgumentTypeError(f"must be an integer >= 0, got {text!r}")
     return value
+
+
+def add_mjcf_arguments(parser) -> None:
+    """``--body`` and ``--no-armature``: how an MJCF file is read (ignored for URDF)."""
+    parser.add_argument(
+        "--body",
+        default="",
+        metavar="NAME",
+        help="MJCF: read only the subtree of this body (default: the whole model, free "
+        "objects included, as MuJoCo's nv)",
+    )
+    parser.add_argument(
+        "--no-armature",
+        action="store_true",
+        help="MJCF: leave MuJoCo's joint armature out of M (MuJoCo's M includes it)",
+    )

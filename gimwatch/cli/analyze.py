@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._format import add_mjcf_arguments, non_negative_int, positive_int, table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import InputError
 from gimwatch.metrics.analyze import analyze, choose_path
@@ -44,7 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         nargs="+",
         metavar="Q",
-        help="configuration: nq numbers, a continuous joint by its angle (rad); default: neutral",
+        help="configuration: nq numbers, a continuous joint by its angle (rad); for MJCF, "
+        "MuJoCo's qpos; default: neutral",
     )
     parser.add_argument(
         "--random",
@@ -54,6 +55,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
     parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    add_mjcf_arguments(parser)
     add_output_arguments(parser, what="configurations")
     parser.add_argument(
         "--backend",
@@ -89,6 +91,8 @@ def run(args: argparse.Namespace) -> int:
         backend=args.backend,
         metrics=None if args.metrics is None else args.metrics.split(","),
         key="--q",
+        body=args.body,
+        armature=not args.no_armature,
     )
     results = analysis.results
     first = results[0]
@@ -104,6 +108,8 @@ def run(args: argparse.Namespace) -> int:
     records = [{"config": i, **r.to_dict()} for i, r in enumerate(results)]
     if args.json:
         header = {"robot": first.robot, "nv": first.nv, "base": base, "method": first.method}
+        if args.body:
+            header["body"] = args.body
         if analysis.placeholder_limits:  # random draws replaced these joints' limits
             header["placeholder_limits"] = list(analysis.placeholder_limits)
         print(json_text({**header, "configurations": records}))

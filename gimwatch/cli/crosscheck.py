@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._format import add_mjcf_arguments, non_negative_int, positive_int, table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.crosscheck import (
     DEFAULT_TOLERANCE,
@@ -45,6 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="also compare MuJoCo's mj_fullM with Pinocchio's crba (MJCF robots: always)",
     )
+    add_mjcf_arguments(parser)
     add_output_arguments(parser, what="robots")
 
 
@@ -97,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
     everything = "all" in args.robots
     specs = list(example_robot_names()) if everything else args.robots
     # Load every named robot first, so that bad input fails with one line before any work.
-    robots = [] if everything else [load_robot(spec, floating=args.floating) for spec in specs]
+    mjcf = {"body": args.body, "armature": not args.no_armature}
+    robots = [] if everything else [load_robot(s, floating=args.floating, **mjcf) for s in specs]
     results: list[CrossCheckResult] = []
     try:
         for i, spec in enumerate(specs, 1):

@@ -245,7 +245,7 @@ def _mjcf_robot(
             spec, "has no degree of freedom with a fixed base; load it with a floating base"
         )
     return Robot(
-        name=name,
+        name=f"{name}[{body}]" if body else name,  # reports say which subtree was read
         spec=spec,
         model=model,
         urdf_xml=urdf_xml,
