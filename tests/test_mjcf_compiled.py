@@ -160,8 +160,9 @@ def test_analyze_q_takes_mujocos_qpos(stem, capsys):
 
     from gimwatch.cli import main
 
-    robot, qpos = _qpos_text(stem)
-    argv = ["analyze", str(FEATURES / f"{stem}.xml"), "--json", "--q", *(repr(float(x)) for x in qpos)]
+    _, qpos = _qpos_text(stem)
+    values = [repr(float(x)) for x in qpos]
+    argv = ["analyze", str(FEATURES / f"{stem}.xml"), "--json", "--q", *values]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", URDFWarning)
         assert main(argv) == 0
