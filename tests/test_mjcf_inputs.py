@@ -119,3 +119,16 @@ def test_armature_false_and_true_differ_by_the_armature(tmp_path):
     with_armature = gim(load_robot(path), q)
     without = gim(load_robot(path, armature=False), q)
     np.testing.assert_allclose(with_armature - without, 0.5 * np.eye(2), atol=1e-15)
+
+
+def test_without_mujoco_an_mjcf_file_is_one_line_saying_what_to_install(
+    tmp_path, monkeypatch, capsys
+):
+    import sys
+
+    path = tmp_path / "m.xml"
+    path.write_text(_side_by_side(1))
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco raises ImportError
+    assert main(["analyze", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "pip install 'gimwatch[mjcf]'" in err
