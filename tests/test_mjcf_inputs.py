@@ -70,12 +70,12 @@ def test_bodies_in_included_files_count(tmp_path, monkeypatch):
 
 
 def test_a_file_larger_than_the_budget_is_refused_unread(tmp_path):
-    from gimwatch.model.robots import MAX_URDF_BYTES
+    from gimwatch.model.mjcf_robot import MAX_MJCF_BYTES
 
     path = tmp_path / "big.xml"
     with path.open("w") as handle:
         handle.write("<mujoco>")
-        handle.truncate(MAX_URDF_BYTES + 1)  # sparse: no disk used
+        handle.truncate(MAX_MJCF_BYTES + 1)  # sparse: no disk used
     with pytest.raises(URDFError, match="bytes"):
         load_robot(path)
 

@@ -15,7 +15,7 @@ Pinocchio model is built from the *compiled* ``MjModel`` (body poses, inertias w
   MuJoCo's qpos entry;
 * ball and free joints: Pinocchio's quaternion is (x, y, z, w), MuJoCo's (w, x, y, z); a
   free joint's linear velocity is in the world frame in MuJoCo, in the body frame in
-  Pinocchio (see :mod:`gimwatch.model.mjcf_coordinates`);
+  Pinocchio (see `gimwatch.model.mjcf_coordinates`);
 * bodies without joints are welded to their parent; bodies welded to the world are left out
   (they do not enter M); ``dof_armature`` goes to ``model.armature`` (Pinocchio's CRBA adds
   it to M's diagonal, as ``mj_fullM`` does) unless ``armature=False``.

@@ -1,6 +1,6 @@
 """The map between MuJoCo's ``qpos``/``qvel`` and gimwatch's q/v for robots read from MJCF.
 
-Pinocchio's joints are MuJoCo's joints in MuJoCo's order (:mod:`gimwatch.model.mjcf_compiled`),
+Pinocchio's joints are MuJoCo's joints in MuJoCo's order (`gimwatch.model.mjcf_compiled`),
 so q and qpos have the same length and the same layout, joint by joint:
 
 =========  ==========================  ==========================================

@@ -1,6 +1,6 @@
 """Recognising MJCF files: the root element of an XML text, by a linear scan.
 
-MJCF is read by MuJoCo's compiler (:mod:`gimwatch.model.mjcf_robot`).
+MJCF is read by MuJoCo's compiler (`gimwatch.model.mjcf_robot`).
 """
 
 from __future__ import annotations

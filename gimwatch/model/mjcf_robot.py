@@ -2,13 +2,13 @@
 
 1. A linear scan of the file and of the files it includes (no parser) refuses, before MuJoCo
    runs, more bytes, ``<body>`` elements or body nesting than gimwatch reads (the URDF
-   budgets: :data:`~gimwatch.model.robots.MAX_URDF_BYTES`, ``$GIMWATCH_MAX_LINKS`` bodies)
-   and bodies nested deeper than :data:`MAX_BODY_DEPTH` (MuJoCo's XML reader stops at about
+   budgets: `MAX_MJCF_BYTES`, ``$GIMWATCH_MAX_LINKS`` bodies)
+   and bodies nested deeper than `MAX_BODY_DEPTH` (MuJoCo's XML reader stops at about
    500 nested elements).
 2. MuJoCo compiles the file; a refusal is one line with MuJoCo's message (element, line).
-3. :func:`~gimwatch.model.mjcf_compiled.build_pinocchio_model` builds the robot; a moving
+3. `build_pinocchio_model` builds the robot; a moving
    subtree without mass is refused; what changes MuJoCo's dynamics but not M (equality
-   constraints, tendon armature) is named in one :class:`~gimwatch.errors.URDFWarning`.
+   constraints, tendon armature) is named in one `URDFWarning`.
 4. DeNOC's input: URDF text of the same tree when DeNOC can read it (hinges and slides,
    one tree, at most a free joint at its root), else "".
 """
@@ -25,8 +25,10 @@ from gimwatch.errors import URDFError, URDFWarning
 from gimwatch.model.mjcf_compiled import build_pinocchio_model, compile_mjcf, subtree_joints
 from gimwatch.model.urdf_text import max_links
 
-__all__ = ["MAX_BODY_DEPTH", "check_mjcf_budget", "read_mjcf", "urdf_of_model"]
+__all__ = ["MAX_BODY_DEPTH", "MAX_MJCF_BYTES", "check_mjcf_budget", "read_mjcf", "urdf_of_model"]
 
+#: The largest MJCF text read, included files counted (as a URDF file: 64 MiB).
+MAX_MJCF_BYTES = 64 * 1024 * 1024
 #: The deepest nesting of ``<body>`` read (tinyxml2, MuJoCo's XML reader, refuses about 500
 #: nested elements with a less clear message).
 MAX_BODY_DEPTH = 400
@@ -51,8 +53,6 @@ def check_mjcf_budget(path: str) -> None:
     Raises:
         URDFError: Too many bytes, bodies or levels, naming the file and the limit.
     """
-    from gimwatch.model.robots import MAX_URDF_BYTES
-
     folder = Path(path).parent
     limit, bodies, total = max_links(), 0, 0
     pending, seen = [Path(path)], set()
@@ -62,8 +62,8 @@ def check_mjcf_budget(path: str) -> None:
             continue  # MuJoCo names a missing or repeated include itself
         seen.add(current)
         total += current.stat().st_size
-        if total > MAX_URDF_BYTES:
-            raise URDFError(path, f"is more than {MAX_URDF_BYTES} bytes with its includes")
+        if total > MAX_MJCF_BYTES:
+            raise URDFError(path, f"is more than {MAX_MJCF_BYTES} bytes with its includes")
         text = current.read_text(encoding="utf-8", errors="replace")
         depth, position = 0, text.find("<")
         while position >= 0:

@@ -10,8 +10,8 @@ for M(q): its own parser, its own tree and its own CRBA (``mj_fullM`` after
   is given), no fused static bodies. A floating base gets ``<freejoint name="root_joint"/>``
   on the root link (the link Pinocchio's free-flyer moves).
 * MJCF robots: the file compiled by MuJoCo as gimwatch read it
-  (:func:`gimwatch.model.mjcf_compiled.compile_mjcf`), joints matched by MuJoCo's joint ids
-  (:mod:`gimwatch.model.mjcf_coordinates` maps the coordinates); when the robot was loaded
+  (`gimwatch.model.mjcf_compiled.compile_mjcf`), joints matched by MuJoCo's joint ids
+  (`gimwatch.model.mjcf_coordinates` maps the coordinates); when the robot was loaded
   with ``armature=False``, ``dof_armature`` is taken off MuJoCo's diagonal too.
 
 Coordinates are mapped joint by joint, by name: revolute/prismatic angle ↔ hinge/slide;
