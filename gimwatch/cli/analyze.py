@@ -13,6 +13,7 @@ from gimwatch.cli._format import (
     positive_int,
     table,
 )
+from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.metrics.analyze import analyze, choose_path
@@ -77,6 +78,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; fixed "
         f"base); auto: denoc above nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
     )
+    # --explain (issue 25): the modes of λmin and λmax at each configuration, dense path only
+    parser.add_argument(
+        "--explain",
+        action="store_true",
+        help="also explain kappa: the joints and bodies of the lambda_min and lambda_max modes",
+    )
     parser.add_argument(
         "--metrics",
         help="comma-separated subset of kappa,diagonal_ratio,pivot_ratio_backward to compute "
@@ -94,10 +101,15 @@ def run(args: argparse.Namespace) -> int:
     if len(specs) == 1:
         analysis = _analysis(specs[0], args)
         _notes(analysis)
+        if args.explain:
+            return _print_explained(specs[0], analysis, args)
         return _print_one(analysis, args)
+    if args.explain:
+        raise InputError("--explain", "used with one robot", f"{len(specs)} robots")
     blocks: list[tuple[str, object, str]] = []
-    for i, spec in enumerate(specs, 1):
-        print(f"analyze: [{i}/{len(specs)}] {spec}", file=sys.stderr)
+    progress = ItemProgress("analyze", len(specs))
+    for spec in specs:
+        progress.start(spec)
         try:
             analysis = _analysis(spec, args)
         except GimwatchError as exc:
@@ -105,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
             continue
         _notes(analysis)
         blocks.append((spec, analysis, ""))
+    progress.close()
     _print_batch(blocks, args)
     return 2 if any(reason for _, _, reason in blocks) else 0
 
@@ -115,6 +128,8 @@ def _analysis(spec: str, args: argparse.Namespace):
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
     if linear and args.floating:
         raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
+    if args.explain and (linear or args.csv):
+        raise InputError("--explain", "used on the dense path, without --csv", True)
     return analyze(
         spec,
         args.q,
@@ -232,3 +247,24 @@ def _print_batch(blocks, args: argparse.Namespace) -> None:
     print(
         f"{len(blocks) - refused}/{len(blocks)} analysed" + (f", {refused} refused" * bool(refused))
     )
+
+
+def _print_explained(spec: str, analysis, args: argparse.Namespace) -> int:
+    """``--explain``: the analysis, and the modes of λmin and λmax at each configuration."""
+    from gimwatch.cli.explain import mode_lines
+    from gimwatch.explain.modes import gim_modes
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot(spec, floating=analysis.floating, max_nv=DATA_NV_LIMIT)
+    modes = [gim_modes(robot, r.q) for r in analysis.results]
+    if args.json:
+        records = [
+            {**r, "modes": m.to_dict()} for r, m in zip(_records(analysis), modes, strict=True)
+        ]
+        print(json_text({**_header(analysis), "configurations": records}))
+        return 0
+    _print_table(analysis)
+    for i, mode in enumerate(modes):
+        for line in mode_lines(mode):
+            print(f"config {i}: {line}")
+    return 0

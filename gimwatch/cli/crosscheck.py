@@ -20,6 +20,7 @@ from gimwatch.cli._format import (
     positive_int,
     table,
 )
+from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.crosscheck import (
     DEFAULT_TOLERANCE,
@@ -145,10 +146,11 @@ def run(args: argparse.Namespace) -> int:
     else:
         loaded = load_each(specs, floating=args.floating, **mjcf)
     results: list = []
+    progress = ItemProgress("crosscheck", len(specs)) if len(specs) > 1 else None
     try:
-        for i, (spec, robot, error) in enumerate(loaded, 1):
-            if len(specs) > 1:
-                print(f"crosscheck: [{i}/{len(specs)}] {spec}", file=sys.stderr)
+        for spec, robot, error in loaded:
+            if progress is not None:
+                progress.start(spec)
             if robot is None:
                 if everything:
                     reason = getattr(error, "problem", str(error))
@@ -171,9 +173,13 @@ def run(args: argparse.Namespace) -> int:
                     raise
                 results.append(_refusal_record(spec, str(exc)))
     except KeyboardInterrupt:
+        if progress is not None:
+            progress.close()
         if results:
             _print(results, args)
         raise
+    if progress is not None:
+        progress.close()
     if results:
         _print(results, args)
     return _status(results)
