@@ -255,7 +255,13 @@ def _print_explained(spec: str, analysis, args: argparse.Namespace) -> int:
     from gimwatch.explain.modes import gim_modes
     from gimwatch.model.robots import load_robot
 
-    robot = load_robot(spec, floating=analysis.floating, max_nv=DATA_NV_LIMIT)
+    robot = load_robot(
+        spec,
+        floating=analysis.floating,
+        max_nv=DATA_NV_LIMIT,
+        body=args.body,
+        armature=not args.no_armature,
+    )
     modes = [gim_modes(robot, r.q) for r in analysis.results]
     if args.json:
         records = [
