@@ -316,7 +316,7 @@ def crosscheck_robot(
     )
     return CrossCheckResult(
         robot=robot.name,
-        floating=robot.floating,
+        floating=robot.floating or "FreeFlyer" in model.joints[1].shortname(),
         nv=robot.nv,
         samples=samples,
         gim_rel_err=errors["gim"],
