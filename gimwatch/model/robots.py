@@ -266,14 +266,10 @@ def _mjcf_robot(
     from gimwatch.model.mjcf_robot import read_mjcf
 
     model, joint_ids, urdf_xml = read_mjcf(source, floating=floating, body=body, armature=armature)
-    if model.nv == 0:
-        raise RobotError(
-            spec, "has no degree of freedom with a fixed base; load it with a floating base"
-        )
-    return Robot(
+    return _robot(
+        model,
         name=f"{name}[{body}]" if body else name,  # reports say which subtree was read
         spec=spec,
-        model=model,
         urdf_xml=urdf_xml,
         source=source,
         floating=floating,
@@ -282,6 +278,19 @@ def _mjcf_robot(
         mjcf_armature=armature,
         mujoco_joints=joint_ids,
     )
+
+
+def _robot(model: pin.Model, *, spec: str, **fields) -> Robot:
+    """The one place a `Robot` is made, from a URDF's or an MJCF's Pinocchio model.
+
+    Raises:
+        RobotError: The model has no degree of freedom (a fixed single body).
+    """
+    if model.nv == 0:
+        raise RobotError(
+            spec, "has no degree of freedom with a fixed base; load it with a floating base"
+        )
+    return Robot(model=model, spec=spec, **fields)
 
 
 def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
@@ -365,18 +374,8 @@ def load_robot(
     if body:
         raise InputError("--body", "given only with an MJCF file", body)
     model, xml = _build_model(xml, source, floating)
-    if model.nv == 0:
-        raise RobotError(
-            text, "has no degree of freedom with a fixed base; load it with a floating base"
-        )
-    return Robot(
-        name=name,
-        spec=text,
-        model=model,
-        urdf_xml=xml,
-        source=source,
-        floating=floating,
-        chain=chain,
+    return _robot(
+        model, name=name, spec=text, urdf_xml=xml, source=source, floating=floating, chain=chain
     )
 
 
@@ -391,7 +390,15 @@ def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
     model, xml = _build_model(xml, source, floating)
-    return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
+    return _robot(
+        model,
+        name=spec.name,
+        spec=f"chain:{spec.n}",
+        urdf_xml=xml,
+        source=source,
+        floating=floating,
+        chain=spec,
+    )
 
 
 def neutral_configuration(robot: Robot) -> np.ndarray:
