@@ -338,6 +338,24 @@ def neutral_configuration(robot: Robot) -> np.ndarray:
 UNIT_NORM_TOLERANCE = 1e-6
 
 
+def _unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Where q's unit blocks end, their sizes and joints: computed once per robot, kept on it."""
+    blocks = robot.__dict__.get("_unit_blocks")
+    if blocks is None:
+        found = [
+            (joint.idx_q + joint.nq, unit_block_size(joint), name)
+            for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True)
+            if unit_block_size(joint)
+        ]
+        blocks = (
+            np.array([b[0] for b in found], dtype=np.int64),
+            np.array([b[1] for b in found], dtype=np.int64),
+            tuple(b[2] for b in found),
+        )
+        object.__setattr__(robot, "_unit_blocks", blocks)  # frozen: a cache, not state
+    return blocks
+
+
 def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
     """Check that ``q`` is a finite real vector of length nq and return it as an array.
 
@@ -354,18 +372,18 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
         raise InputError("q", "a vector of real numbers", str(exc)) from None
     if array.shape != (robot.nq,):
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
-    if not np.all(np.isfinite(array)):
+    from gimwatch.model.kernels import unit_block_fault
+
+    stops, sizes, names = _unit_blocks(robot)
+    fault = unit_block_fault(array, stops, sizes, UNIT_NORM_TOLERANCE)
+    if fault == -2:
         raise InputError("q", "finite", array.tolist())
-    for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
-        unit = unit_block_size(joint)
-        if unit:
-            stop = joint.idx_q + joint.nq
-            norm = float(np.linalg.norm(array[stop - unit : stop]))
-            if not abs(norm - 1.0) <= UNIT_NORM_TOLERANCE:
-                what = "quaternion" if unit == 4 else "(cos θ, sin θ)"
-                raise InputError(
-                    f"the {what} of joint {name!r} in q",
-                    f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
-                    round(norm, 9),
-                )
+    if fault >= 0:
+        stop, unit = int(stops[fault]), int(sizes[fault])
+        what = "quaternion" if unit == 4 else "(cos θ, sin θ)"
+        raise InputError(
+            f"the {what} of joint {names[fault]!r} in q",
+            f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
+            round(float(np.linalg.norm(array[stop - unit : stop])), 9),
+        )
     return array
