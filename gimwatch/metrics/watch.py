@@ -29,8 +29,8 @@ from gimwatch.metrics.alarm import (
     check_on_alarm,
     warn_alarm,
 )
-from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.conditioning import ldlt_pivots
+from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.registry import METRICS, GimState
 from gimwatch.metrics.watch_series import WatchSeries
 from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
@@ -380,7 +380,7 @@ class Watch:
 
     @property
     def series(self) -> dict[str, np.ndarray]:
-        """name -> the watched metric's values so far (read-only views; vector metrics 2-D)."""
+        """Name -> the watched metric's values so far (read-only views; vector metrics 2-D)."""
         return self._series.columns()
 
     def array(self, name: str) -> np.ndarray:

@@ -60,7 +60,7 @@ class WatchSeries:
         return _view(self._t[: self.size])
 
     def columns(self) -> dict[str, np.ndarray]:
-        """name -> its values so far (read-only views; copy to keep them past new samples)."""
+        """Name -> its values so far (read-only views; copy to keep them past new samples)."""
         return {name: _view(column[: self.size]) for name, column in self._data.items()}
 
     def last(self, name: str):

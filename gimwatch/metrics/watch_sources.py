@@ -303,7 +303,7 @@ class MujocoSource:
         return data
 
     def gim(self, q=None, out: np.ndarray | None = None) -> np.ndarray:
-        """M (``mj_fullM``, into ``out`` when given), in the robot's coordinates if one was given."""
+        """M (``mj_fullM``, into ``out`` if given), in the robot's coordinates if one was given."""
         data = self._data_at(q)
         M = np.empty((self.nv, self.nv)) if out is None else out
         self._mujoco.mj_fullM(self.model, data, M)

@@ -17,6 +17,8 @@ watch calls once per sample instead of several NumPy reductions around a LAPACK 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -27,7 +29,7 @@ _FINITE_MAX = np.finfo(np.float64).max
 
 @njit(cache=True)
 def scaled_spectrum(M):  # pragma: no cover - compiled
-    """(eigenvalues of M / s ascending, s) with s = max |M_ij|; a NaN spectrum if M is not finite.
+    """(eigenvalues of M / s ascending, s) with s = 2^k <= max |M_ij| < 2^(k+1); a NaN spectrum if M is not finite.
 
     M is read, not written (symmetric, lower triangle used). s = 0 also gives NaN.
     """
@@ -42,12 +44,13 @@ def scaled_spectrum(M):  # pragma: no cover - compiled
                 scale = a
     if scale == 0.0:
         return np.full(n, np.nan), np.nan
+    scale = math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= scale: rounds nothing
     return np.linalg.eigvalsh(M * (1.0 / scale)), scale
 
 
 @njit(cache=True)
 def positive_ratio(values):  # pragma: no cover - compiled
-    """max / min of ``values``; NaN unless all are finite and > 0."""
+    """Max / min of ``values``; NaN unless all are finite and > 0."""
     lo = np.inf
     hi = 0.0
     for x in values:
