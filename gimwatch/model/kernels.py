@@ -29,7 +29,7 @@ _FINITE_MAX = np.finfo(np.float64).max
 
 @njit(cache=True)
 def scaled_spectrum(M):  # pragma: no cover - compiled
-    """(eigenvalues of M / s ascending, s) with s = 2^k <= max |M_ij| < 2^(k+1); a NaN spectrum if M is not finite.
+    """(eigenvalues of M / s ascending, s), s = 2^k <= max |M_ij| < 2^(k+1); NaN if M is not finite.
 
     M is read, not written (symmetric, lower triangle used). s = 0 also gives NaN.
     """
