@@ -34,8 +34,19 @@ from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quali
 from gimwatch.metrics.registry import METRICS, GimState
 from gimwatch.metrics.watch_series import WatchSeries
 from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
-from gimwatch.model.kernels import positive_ratio, scaled_spectrum
-from gimwatch.model.robots import DATA_NV_LIMIT, Robot, as_configuration
+from gimwatch.model.kernels import (
+    positive_ratio,
+    scaled_spectrum,
+    spectrum_ratio,
+    unit_block_fault,
+)
+from gimwatch.model.robots import (
+    DATA_NV_LIMIT,
+    UNIT_NORM_TOLERANCE,
+    Robot,
+    as_configuration,
+    unit_blocks,
+)
 
 __all__ = [
     "DEFAULT_ALARM_THRESHOLD",
@@ -150,6 +161,10 @@ class Watch:
         # the compiled path, once the first sample passed every check (see _fast_values)
         self._fast = bool(self.metrics) and FAST_METRICS.issuperset(self.metrics)
         self._names = tuple(self.metrics)
+        self._only_kappa = self._names == ("kappa",)
+        self._blocks = (*unit_blocks(robot), robot.nq) if self._check_q else None
+        self._matrix_watch = isinstance(dynamics, GivenMatrix)
+        self._reads_state = bool(getattr(dynamics, "reads_state", False))
         self._checked = False
         self._M = np.empty((self.nv, self.nv)) if self.full else None
 
@@ -222,18 +237,18 @@ class Watch:
         """
         if not self.metrics:
             return None
-        if isinstance(self.dynamics, GivenMatrix):
+        if self._matrix_watch:
             raise InputError(
                 "sample(t, q)",
                 "used on a watch of a robot or a MuJoCo pair",
                 "a matrix watch",
                 hint="use sample_matrix(t, M) or sample_diagonal(t, d)",
             )
-        if q is None and not getattr(self.dynamics, "reads_state", False):
+        if q is None and not self._reads_state:
             raise InputError("q", "given (a configuration of the robot)", None)
         t = _time(t)
         if self._check_q:
-            q = as_configuration(self.robot, q)
+            q = self._configuration(q)
         values = self._fast_values(self.dynamics, q) if self._checked else None
         if values is None:
             state = GimState(self.robot, self.data, q, self.full, self.dynamics, self.lean)
@@ -279,6 +294,23 @@ class Watch:
             self._given = self._given or GivenMatrix(self.nv, self.dof_names)
         return self._given
 
+    def _configuration(self, q) -> np.ndarray:
+        """Q checked by one compiled pass when already a float vector of nq, else copied.
+
+        The compiled path only reads q, so a good float vector is not copied; anything else
+        goes through :func:`as_configuration` (a checked copy, or the error naming the fault).
+        """
+        stops, sizes, _, nq = self._blocks
+        if (
+            self._fast
+            and type(q) is np.ndarray
+            and q.dtype == np.float64
+            and q.shape == (nq,)
+            and unit_block_fault(q, stops, sizes, UNIT_NORM_TOLERANCE) == -1
+        ):
+            return q
+        return as_configuration(self.robot, q)
+
     def _checked_values(self, state: GimState, source, q) -> list:
         """Every metric through the checked state; the first sample also checks M > 0.
 
@@ -305,6 +337,9 @@ class Watch:
         """
         if not self._fast:
             return None
+        if self._only_kappa:
+            value = spectrum_ratio(self._gim(source, q))
+            return [value] if value >= 1.0 else None  # NaN: the checked path names why
         if self.full:
             M = self._gim(source, q)
             spectrum, scale = scaled_spectrum(M)

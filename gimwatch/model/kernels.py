@@ -8,6 +8,7 @@ watch calls once per sample instead of several NumPy reductions around a LAPACK 
   a finite M finite: ``[[2, 1], [1, 2]] · 8e307`` has κ = 3, not inf. κ = λmax / λmin needs
   no rescaling (Shah & Saha 2013, Eq. 6). A non-finite M gives a NaN spectrum: the caller's
   checked path then names the problem, so the check costs nothing when M is good.
+* :func:`spectrum_ratio` — κ alone from that spectrum, NaN when M is not finite and > 0.
 * :func:`positive_ratio` — max / min of a vector (δ, Sec. 4), NaN unless every entry is
   finite and > 0.
 * :func:`unit_block_fault` — the first unit block of q (a quaternion, a continuous joint's
@@ -22,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["positive_ratio", "scaled_spectrum", "unit_block_fault"]
+__all__ = ["positive_ratio", "scaled_spectrum", "spectrum_ratio", "unit_block_fault"]
 
 _FINITE_MAX = np.finfo(np.float64).max
 
@@ -46,6 +47,16 @@ def scaled_spectrum(M):  # pragma: no cover - compiled
         return np.full(n, np.nan), np.nan
     scale = math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= scale: rounds nothing
     return np.linalg.eigvalsh(M * (1.0 / scale)), scale
+
+
+@njit(cache=True)
+def spectrum_ratio(M):  # pragma: no cover - compiled
+    """κ = λmax / λmin of M (Eq. 6) by :func:`scaled_spectrum`; NaN unless M is finite and > 0."""
+    spectrum, _ = scaled_spectrum(M)
+    low = spectrum[0]
+    if not low > 0.0:
+        return np.nan
+    return spectrum[-1] / low
 
 
 @njit(cache=True)

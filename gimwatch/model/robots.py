@@ -63,6 +63,7 @@ __all__ = [
     "parse_chain_spec",
     "placeholder_limit_joints",
     "random_configurations",
+    "unit_blocks",
 ]
 
 _CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
@@ -338,7 +339,7 @@ def neutral_configuration(robot: Robot) -> np.ndarray:
 UNIT_NORM_TOLERANCE = 1e-6
 
 
-def _unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+def unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
     """Where q's unit blocks end, their sizes and joints: computed once per robot, kept on it."""
     blocks = robot.__dict__.get("_unit_blocks")
     if blocks is None:
@@ -374,7 +375,7 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
     from gimwatch.model.kernels import unit_block_fault
 
-    stops, sizes, names = _unit_blocks(robot)
+    stops, sizes, names = unit_blocks(robot)
     fault = unit_block_fault(array, stops, sizes, UNIT_NORM_TOLERANCE)
     if fault == -2:
         raise InputError("q", "finite", array.tolist())
