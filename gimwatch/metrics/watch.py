@@ -337,14 +337,12 @@ class Watch:
         """
         if not self._fast:
             return None
-        if self._only_kappa and self.nv <= COMPILED_EIG_MAX_NV:
+        if self._only_kappa:
             value = spectrum_ratio(self._gim(source, q))
             return [value] if value >= 1.0 else None  # NaN: the checked path names why
         if self.full:
             M = self._gim(source, q)
-            spectrum, scale = (
-                scaled_spectrum(M) if self.nv <= COMPILED_EIG_MAX_NV else _numpy_spectrum(M)
-            )
+            spectrum, scale = scaled_spectrum(M)
             low = spectrum[0]
             if not low > 0.0:
                 return None
@@ -447,10 +445,6 @@ class Watch:
         return watch_frame(self.arrays())
 
 
-#: Up to this nv the watch's eigen-solve is compiled (LAPACK from numba, no wrapper); above
-#: it NumPy's ``eigvalsh`` (its wrapper's few µs no longer count, its LAPACK build is faster).
-COMPILED_EIG_MAX_NV = 24
-
 #: Up to this nv, δ of a ``pinocchio.Model`` without URDF reads CRBA's diagonal (C++, O(n²))
 #: rather than the O(n) centroidal map, whose Python around Pinocchio costs more.
 CRBA_DIAGONAL_MAX_NV = 100
@@ -464,12 +458,3 @@ def _time(t) -> float:
     if not -math.inf < t < math.inf:
         raise InputError("t", "a finite time in seconds", t)
     return t
-
-
-def _numpy_spectrum(M: np.ndarray) -> tuple[np.ndarray, float]:
-    """:func:`~gimwatch.model.kernels.scaled_spectrum` by NumPy: NaN or inf in M give NaN."""
-    scale = float(np.max(np.abs(M)))
-    if not 0.0 < scale < math.inf:
-        return np.full(M.shape[0], math.nan), math.nan
-    scale = math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= max |M_ij|: rounds nothing
-    return np.linalg.eigvalsh(M * (1.0 / scale)), scale

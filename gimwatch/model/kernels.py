@@ -26,13 +26,17 @@ from numba import njit
 __all__ = ["positive_ratio", "scaled_spectrum", "spectrum_ratio", "unit_block_fault"]
 
 _FINITE_MAX = np.finfo(np.float64).max
+#: Entries of M between these need no scaling: the solve keeps clear of overflow and of
+#: subnormal numbers (M is then solved as given, s = 1).
+SAFE_LOW, SAFE_HIGH = 2.0**-400, 2.0**400
 
 
 @njit(cache=True)
 def scaled_spectrum(M):  # pragma: no cover - compiled
     """(eigenvalues of M / s ascending, s), s = 2^k <= max |M_ij| < 2^(k+1); NaN if M is not finite.
 
-    M is read, not written (symmetric, lower triangle used). s = 0 also gives NaN.
+    M is read, not written (symmetric, lower triangle used). s = 0 also gives NaN; s = 1
+    when max |M_ij| lies in [SAFE_LOW, SAFE_HIGH], where scaling changes nothing.
     """
     n = M.shape[0]
     scale = 0.0
@@ -45,6 +49,8 @@ def scaled_spectrum(M):  # pragma: no cover - compiled
                 scale = a
     if scale == 0.0:
         return np.full(n, np.nan), np.nan
+    if SAFE_LOW <= scale <= SAFE_HIGH:  # no overflow or underflow ahead: skip the copy
+        return np.linalg.eigvalsh(M), 1.0
     scale = math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= scale: rounds nothing
     return np.linalg.eigvalsh(M * (1.0 / scale)), scale
 
