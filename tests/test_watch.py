@@ -66,7 +66,11 @@ def counters(monkeypatch):
     counts = {"eig": 0, "crba": 0, "diag": 0}
     from gimwatch.model import kernels
 
-    for kernel in (kernels.scaled_spectrum, kernels.spectrum_ratio):  # compiled before the
+    for kernel in (
+        kernels.scaled_spectrum,
+        kernels.spectrum_ratio,
+        kernels.spectrum_scale,
+    ):  # compiled before the
         kernel(np.eye(2))  # patch below, which numba would otherwise see in its place
 
     def wrap(module, name, key):

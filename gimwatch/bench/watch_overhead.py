@@ -11,6 +11,11 @@ computation of the same quantity and against one step of the loop it sits in.
   ``eigvalsh``; δ against the O(n) diagonal (DeNOC's compiled diag M, max/min, unchecked q);
   both against ``pin.aba``.
 
+A second table (``watch_tracker``): on the paper's rod chains of n links moved smoothly
+(``Watch(robot, ...)``, one sample per small step in q), a κ sample by the dense solve
+(``kappa``: CRBA + the compiled eigen-solve) against the O(n) tracker (``kappa_tracked``),
+to say from which n the tracker pays.
+
 Columns: ``bare_us``, ``watch_us``, ``step_us`` (medians, µs), ``watch_vs_bare`` and
 ``watch_vs_step`` (medians of the per-round ratios).
 """
@@ -30,10 +35,13 @@ from gimwatch.metrics.watch import Watch
 from gimwatch.model.mujoco_model import compile_robot
 from gimwatch.model.robots import load_robot
 
-__all__ = ["COLUMNS", "ROBOTS", "run"]
+__all__ = ["CHAIN_SIZES", "COLUMNS", "ROBOTS", "TRACKER_COLUMNS", "run"]
 
 #: (spec, floating base): a 7-DoF arm, a quadruped and a humanoid on free joints.
 ROBOTS = (("xarm7", False), ("solo12", True), ("g1", True))
+#: Chain sizes (links) of the tracker table.
+CHAIN_SIZES = (10, 20, 30, 50, 100)
+TRACKER_COLUMNS = ("n", "samples", "dense_us", "tracked_us", "tracked_vs_dense")
 COLUMNS = (
     "robot",
     "nv",
@@ -149,10 +157,42 @@ def measure(context: BenchContext) -> Table:
     return table
 
 
+def measure_tracker(context: BenchContext) -> Table:
+    """One row per chain size: κ per sample, dense solve against the tracker, same path."""
+    samples, rounds = (20, 2) if context.quick else (200, 5)
+    sizes = CHAIN_SIZES[:2] if context.quick else CHAIN_SIZES
+    table = Table("watch_tracker", TRACKER_COLUMNS)
+    for n in sizes:
+        robot = load_robot(f"chain:{n}")
+        rng = np.random.default_rng(context.seed)
+        start, direction = rng.uniform(-1.0, 1.0, n), rng.uniform(-1.0, 1.0, n)
+        path = [start + 1e-3 * k * direction for k in range(samples)]
+        context.progress(f"  chain:{n}: dense κ against the tracker, {rounds} rounds")
+        times = {"kappa": [], "kappa_tracked": []}
+        for _ in range(rounds):
+            for metric in times:
+                watch = Watch(robot, (metric,))
+                watch.sample(0.0, path[0])  # warm: compiled kernels, the tracker's start
+                begin = time.perf_counter()
+                for k, q in enumerate(path):
+                    watch.sample(float(k), q)
+                times[metric].append((time.perf_counter() - begin) / samples)
+        dense, tracked = np.asarray(times["kappa"]), np.asarray(times["kappa_tracked"])
+        table.add(
+            n=n,
+            samples=samples,
+            dense_us=float(np.median(dense)) * 1e6,
+            tracked_us=float(np.median(tracked)) * 1e6,
+            tracked_vs_dense=float(np.median(tracked / dense)),
+        )
+    return table
+
+
 def run(context: BenchContext) -> SectionResult:
     """Measure the watch's sample against the bare computation and the loop's step."""
     with threadpool_limits(limits=1, user_api="blas"):
         table = measure(context)
+        tracker = measure_tracker(context)
     columns = {
         "robot": "robot",
         "nv": "nv",
@@ -171,6 +211,19 @@ def run(context: BenchContext) -> SectionResult:
         "`pin.aba`); medians of interleaved rounds, ratios within a round.",
         "",
         markdown_table(table.rows, columns),
+        "",
+        "κ per sample along a smooth path on rod chains: the dense solve (`kappa`) against "
+        "the O(n) tracker (`kappa_tracked`), both through `Watch(robot, ...)`.",
+        "",
+        markdown_table(
+            tracker.rows,
+            {
+                "n": "n",
+                "dense_us": "dense κ (µs)",
+                "tracked_us": "tracked κ (µs)",
+                "tracked_vs_dense": "tracked / dense",
+            },
+        ),
     ]
     worst = {
         m: max(r["watch_vs_bare"] for r in table.rows if r["metric"] == m)
@@ -179,7 +232,7 @@ def run(context: BenchContext) -> SectionResult:
     return SectionResult(
         name="watch_overhead",
         title="The watch sample against the bare computation",
-        tables=[table],
+        tables=[table, tracker],
         markdown="\n".join(text),
         headline="\n".join(text),
         summary={f"{m}_watch_vs_bare_max": v for m, v in worst.items()},

@@ -23,12 +23,36 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["positive_ratio", "scaled_spectrum", "spectrum_ratio", "unit_block_fault"]
+__all__ = [
+    "positive_ratio",
+    "scaled_spectrum",
+    "spectrum_ratio",
+    "spectrum_scale",
+    "unit_block_fault",
+]
 
 _FINITE_MAX = np.finfo(np.float64).max
 #: Entries of M between these need no scaling: the solve keeps clear of overflow and of
 #: subnormal numbers (M is then solved as given, s = 1).
 SAFE_LOW, SAFE_HIGH = 2.0**-400, 2.0**400
+
+
+@njit(cache=True)
+def spectrum_scale(M):  # pragma: no cover - compiled
+    """The s of :func:`scaled_spectrum` (1 in the safe range), NaN if M is not finite or 0."""
+    scale = 0.0
+    for i in range(M.shape[0]):
+        for j in range(M.shape[1]):
+            a = abs(M[i, j])
+            if not a <= _FINITE_MAX:
+                return np.nan
+            if a > scale:
+                scale = a
+    if scale == 0.0:
+        return np.nan
+    if SAFE_LOW <= scale <= SAFE_HIGH:
+        return 1.0
+    return math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= scale: rounds nothing
 
 
 @njit(cache=True)
@@ -38,20 +62,11 @@ def scaled_spectrum(M):  # pragma: no cover - compiled
     M is read, not written (symmetric, lower triangle used). s = 0 also gives NaN; s = 1
     when max |M_ij| lies in [SAFE_LOW, SAFE_HIGH], where scaling changes nothing.
     """
-    n = M.shape[0]
-    scale = 0.0
-    for i in range(n):
-        for j in range(n):
-            a = abs(M[i, j])
-            if not a <= _FINITE_MAX:
-                return np.full(n, np.nan), np.nan
-            if a > scale:
-                scale = a
-    if scale == 0.0:
-        return np.full(n, np.nan), np.nan
-    if SAFE_LOW <= scale <= SAFE_HIGH:  # no overflow or underflow ahead: skip the copy
+    scale = spectrum_scale(M)
+    if not scale > 0.0:
+        return np.full(M.shape[0], np.nan), np.nan
+    if scale == 1.0:  # no overflow or underflow ahead: skip the copy
         return np.linalg.eigvalsh(M), 1.0
-    scale = math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= scale: rounds nothing
     return np.linalg.eigvalsh(M * (1.0 / scale)), scale
 
 
