@@ -236,3 +236,16 @@ def test_a_mujoco_m_that_is_not_positive_definite_is_refused(metrics):
     with pytest.raises(GimwatchError, match="positive"):
         watch.sample(0.0)
     assert watch.array("t").size == 0
+
+
+@pytest.mark.parametrize("nv", [2, 30])
+@pytest.mark.parametrize("metrics", [("kappa",), ("kappa", "eigenvalues")])
+def test_a_source_m_that_goes_bad_mid_run_is_refused_by_the_checked_path(nv, metrics):
+    """The compiled path reads only diag M for its scale: bad entries off it still fail."""
+    watch = Watch.from_matrices(nv, metrics)
+    watch.sample_matrix(0.0, np.eye(nv))
+    bad = np.eye(nv)
+    bad[0, 1] = bad[1, 0] = 1e300  # symmetric, finite, indefinite, far above the diagonal
+    with pytest.raises(GimwatchError, match="positive definite"):
+        watch.sample_matrix(1.0, bad)
+    assert watch.array("t").tolist() == [0.0]

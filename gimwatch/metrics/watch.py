@@ -338,6 +338,12 @@ class Watch:
         """
         if not self._fast:
             return None
+        try:
+            return self._compiled_values(source, q)
+        except np.linalg.LinAlgError:  # NaN in M reached LAPACK: the checked path says where
+            return None
+
+    def _compiled_values(self, source, q) -> list | None:
         if self._only_kappa and self.nv > NUMPY_EIG_MIN_NV:  # NumPy's LAPACK is faster there
             M = self._gim(source, q)
             scale = spectrum_scale(M)

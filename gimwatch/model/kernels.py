@@ -3,11 +3,13 @@
 Small numba kernels (cached on disk, so only the first run ever compiles them) that the
 watch calls once per sample instead of several NumPy reductions around a LAPACK call:
 
-* :func:`scaled_spectrum` — the eigenvalues of M / s, s = max |M_ij|, ascending (LAPACK's
-  symmetric solver, called from compiled code without NumPy's wrapper). Scaling first keeps
-  a finite M finite: ``[[2, 1], [1, 2]] · 8e307`` has κ = 3, not inf. κ = λmax / λmin needs
-  no rescaling (Shah & Saha 2013, Eq. 6). A non-finite M gives a NaN spectrum: the caller's
-  checked path then names the problem, so the check costs nothing when M is good.
+* :func:`scaled_spectrum` — the eigenvalues of M / s, s a power of two near max M_ii,
+  ascending (LAPACK's symmetric solver, called from compiled code without NumPy's wrapper).
+  Scaling first keeps a finite M finite: ``[[2, 1], [1, 2]] · 8e307`` has κ = 3, not inf.
+  κ = λmax / λmin needs no rescaling (Shah & Saha 2013, Eq. 6). A bad M gives a NaN or
+  non-positive spectrum (or LinAlgError): the caller's checked path then names the
+  problem, so the check costs nothing when M is good.
+* :func:`spectrum_scale` — that s, from the diagonal alone.
 * :func:`spectrum_ratio` — κ alone from that spectrum, NaN when M is not finite and > 0.
 * :func:`positive_ratio` — max / min of a vector (δ, Sec. 4), NaN unless every entry is
   finite and > 0.
@@ -39,17 +41,20 @@ SAFE_LOW, SAFE_HIGH = 2.0**-400, 2.0**400
 
 @njit(cache=True)
 def spectrum_scale(M):  # pragma: no cover - compiled
-    """The s of :func:`scaled_spectrum` (1 in the safe range), NaN if M is not finite or 0."""
+    """The s of :func:`scaled_spectrum` from diag M (n reads, not n²); NaN if it is not > 0.
+
+    For a positive definite M, |M_ij| <= sqrt(M_ii M_jj) <= max M_ii, so the diagonal bounds
+    every entry. An M that is not (huge off-diagonal entries, NaN off the diagonal) gives
+    a non-positive, non-finite spectrum or LAPACK's LinAlgError: the caller's checked path.
+    s = 1 when max M_ii lies in [SAFE_LOW, SAFE_HIGH], where scaling changes nothing.
+    """
     scale = 0.0
     for i in range(M.shape[0]):
-        for j in range(M.shape[1]):
-            a = abs(M[i, j])
-            if not a <= _FINITE_MAX:
-                return np.nan
-            if a > scale:
-                scale = a
-    if scale == 0.0:
-        return np.nan
+        a = M[i, i]
+        if not 0.0 < a <= _FINITE_MAX:
+            return np.nan
+        if a > scale:
+            scale = a
     if SAFE_LOW <= scale <= SAFE_HIGH:
         return 1.0
     return math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= scale: rounds nothing
@@ -57,10 +62,10 @@ def spectrum_scale(M):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def scaled_spectrum(M):  # pragma: no cover - compiled
-    """(eigenvalues of M / s ascending, s), s = 2^k <= max |M_ij| < 2^(k+1); NaN if M is not finite.
+    """(eigenvalues of M / s ascending, s), s = 2^k <= max M_ii < 2^(k+1) (:func:`spectrum_scale`).
 
-    M is read, not written (symmetric, lower triangle used). s = 0 also gives NaN; s = 1
-    when max |M_ij| lies in [SAFE_LOW, SAFE_HIGH], where scaling changes nothing.
+    M is read, not written (symmetric, lower triangle used). A diagonal entry <= 0 or not
+    finite gives a NaN spectrum; NaN off the diagonal raises LAPACK's LinAlgError.
     """
     scale = spectrum_scale(M)
     if not scale > 0.0:
