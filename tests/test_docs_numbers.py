@@ -1231,3 +1231,14 @@ def test_watch_page_quotes_the_committed_watch_overhead_run():
         rf"{ratio('xarm7', 'pinocchio', 'delta')}× the O\(n\) diagonal",
     )
     _find("docs/watch.md", rf"{ratio('g1', 'mujoco', 'kappa', 'watch_vs_step')} `mj_step`s")
+    tracker = {
+        int(r["n"]): float(r["tracked_vs_dense"]) for r in _csv("watch_overhead/watch_tracker.csv")
+    }
+    pays = min(n for n, ratio in tracker.items() if ratio < 1.0)
+    below = max(n for n in tracker if n < pays)
+    _find(
+        "docs/watch.md",
+        rf"pays from about n = {pays}: .* costs {tracker[below]:.2f}× the dense κ sample at "
+        rf"n = {below}, {tracker[pays]:.2f}× at n = {pays} and {tracker[max(tracker)]:.2f}× at "
+        rf"n = {max(tracker)}",
+    )
