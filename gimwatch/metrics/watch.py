@@ -466,7 +466,7 @@ NUMPY_EIG_MIN_NV = 24
 
 #: Up to this nv, δ of a ``pinocchio.Model`` without URDF reads CRBA's diagonal (C++, O(n²))
 #: rather than the O(n) centroidal map, whose Python around Pinocchio costs more.
-CRBA_DIAGONAL_MAX_NV = 100
+CRBA_DIAGONAL_MAX_NV = 40
 
 
 def _time(t) -> float:
