@@ -2,7 +2,7 @@
 
 Importing gimwatch does no work: no robot is loaded, nothing is written, and no submodule is
 imported until one of its names is first used (PEP 562). ``gimwatch.load_robot`` imports
-``gimwatch.model.robots`` on first access; every name of :data:`__all__` is reachable this
+``gimwatch.model.robots`` on first access; every name of `__all__` is reachable this
 way, and ``from gimwatch import X`` works as usual.
 """
 
@@ -56,14 +56,17 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
         Robot,
+        default_floating,
         example_robot_names,
         load_robot,
         neutral_configuration,
         random_configurations,
     )
+    from gimwatch.simulation.bundled_scenes import bundled_scenes
     from gimwatch.simulation.results_folder import summarize, write_simulation
     from gimwatch.simulation.scene import Scene, load_scene, parse_scene
-    from gimwatch.simulation.simulate import Simulation, Trajectory, run_scene
+    from gimwatch.simulation.simulate import Simulation, run_scene
+    from gimwatch.simulation.trajectory import Trajectory
     from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
     from gimwatch.stress.reference_tree import TreeReference
     from gimwatch.stress.suite import StressResult, run_stress
@@ -98,12 +101,13 @@ _EXPORTS: dict[str, str] = {
     "SimulationError": "gimwatch.errors",
     "StressResult": "gimwatch.stress.suite",
     "SurveyResult": "gimwatch.survey.records",
-    "Trajectory": "gimwatch.simulation.simulate",
+    "Trajectory": "gimwatch.simulation.trajectory",
     "TreeReference": "gimwatch.stress.reference_tree",
     "URDFError": "gimwatch.errors",
     "URDFWarning": "gimwatch.errors",
     "Watch": "gimwatch.metrics.watch",
     "analyze_configuration": "gimwatch.metrics.dense_analysis",
+    "bundled_scenes": "gimwatch.simulation.bundled_scenes",
     "chain_spec": "gimwatch.model.chains",
     "check_gim": "gimwatch.metrics.conditioning",
     "condition_estimate_1norm": "gimwatch.metrics.conditioning",
@@ -121,6 +125,7 @@ _EXPORTS: dict[str, str] = {
     "kappa_matrix_free": "gimwatch.metrics.matrix_free",
     "ldlt_pivots": "gimwatch.metrics.conditioning",
     "load_robot": "gimwatch.model.robots",
+    "default_floating": "gimwatch.model.robots",
     "load_scene": "gimwatch.simulation.scene",
     "neutral_configuration": "gimwatch.model.robots",
     "parse_scene": "gimwatch.simulation.scene",
@@ -171,11 +176,13 @@ __all__ = [
     "Watch",
     "__version__",
     "analyze_configuration",
+    "bundled_scenes",
     "chain_spec",
     "check_gim",
     "condition_estimate_1norm",
     "condition_number",
     "crosscheck_robot",
+    "default_floating",
     "diagonal_ratio",
     "eigenvalues",
     "estimator_quality",

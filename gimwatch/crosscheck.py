@@ -1,8 +1,8 @@
 """Cross-check of the DeNOC implementation against Pinocchio, robot by robot.
 
 At K seeded random states (q within the joint limits from
-:func:`~gimwatch.model.robots.random_configurations`; v, a, τ standard normal from a NumPy
-generator with the same seed) it compares
+[`random_configurations`][gimwatch.model.robots.random_configurations]; v, a, τ standard normal from
+a NumPy generator with the same seed) it compares
 
 * the GIM with ``pinocchio.crba`` (and its O(n) diagonal),
 * τ with ``pinocchio.rnea``,
@@ -75,6 +75,9 @@ class CrossCheckResult:
             coordinates) against ``crba``; None without ``peer="mujoco"``.
         placeholder_limits: Joints whose placeholder limits were replaced by ±π rad / ±1 m.
         mujoco_refusal: Why MuJoCo refused the robot (the link and its reason), or "".
+        status: ``"passed"``, ``"failed"``, or ``"not compared"`` when there was nothing to
+            compare (M ≡ 0: no moving mass) — never counted as a pass; the reason is in
+            ``note``.
     """
 
     robot: str
@@ -94,6 +97,11 @@ class CrossCheckResult:
     mujoco_gim_rel_err: float | None = None
     placeholder_limits: tuple[str, ...] = ()
     mujoco_refusal: str = ""
+    status: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.status:
+            object.__setattr__(self, "status", "passed" if self.passed else "failed")
 
     def to_dict(self) -> dict:
         """The record as a plain dict (for JSON)."""
@@ -207,11 +215,12 @@ def crosscheck_robot(
             refusal = exc.problem
     rng = np.random.default_rng(seed)
     errors = dict.fromkeys(("gim", "diag", "tau", "qdd", "backward", "pivots", "mujoco"), 0.0)
-    kappa_max, conditioned_ok, singular_note = 0.0, True, ""
+    kappa_max, conditioned_ok, singular_note, largest_entry = 0.0, True, "", 0.0
     for q in random_configurations(robot, samples, seed=seed):
         v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
         upper = np.triu(pin.crba(model, data, q))
         M_ref = _finite(robot, "mass matrix M(q)", upper + np.triu(upper, 1).T)
+        largest_entry = max(largest_entry, float(np.abs(M_ref).max(initial=0.0)))
         eigenvalues = np.linalg.eigvalsh(M_ref)
         rank_deficient = eigenvalues[0] <= robot.nv * _EPS * eigenvalues[-1]
         kappa = np.inf if rank_deficient else extreme_ratio(eigenvalues)
@@ -255,6 +264,12 @@ def crosscheck_robot(
         )
         errors["backward"] = _worst(errors["backward"], float(backward))
     notes = []
+    vacuous = largest_entry == 0.0
+    if vacuous:  # every error is 0 / 1 = 0: nothing was compared, nothing passed
+        notes.append(
+            f"not compared: M(q) ≡ 0 at all {samples} samples (no link beyond a moving joint "
+            "has mass: give the links <inertial> elements)"
+        )
     if not use_denoc:
         notes.append("DeNOC reads URDF only: Pinocchio's M is compared with MuJoCo's")
         for key in ("gim", "diag", "tau", "qdd", "backward", "pivots"):
@@ -272,7 +287,7 @@ def crosscheck_robot(
         notes.append(placeholder_note(placeholders))
     if mj_model is None:
         errors["mujoco"] = None
-    if not singular_note:  # a singular M has its own label in the note
+    if not singular_note and not vacuous:  # a singular M has its own label in the note
         warn_if_ill_conditioned(kappa_max, where=f"{robot.name} (largest over {samples} samples)")
     compared = [errors[k] for k in ("gim", "diag", "tau", "backward", "mujoco")]
     passed = conditioned_ok and all(e <= tolerance for e in compared if e is not None)
@@ -292,9 +307,10 @@ def crosscheck_robot(
         pivots_rel_err=errors["pivots"],
         kappa_max=kappa_max,
         tolerance=tolerance,
-        passed=bool(passed),
+        passed=bool(passed) and not vacuous,
         note="; ".join(notes),
         mujoco_gim_rel_err=errors["mujoco"],
         placeholder_limits=placeholders,
         mujoco_refusal=refusal,
+        status="not compared" if vacuous else "",
     )

@@ -1,11 +1,12 @@
 """Alarms of the watch: the record of an upward crossing, its warning, the default threshold.
 
-The watch (:class:`~gimwatch.metrics.watch.Watch`) compares one watched metric with a
-threshold at every sample and acts once per *upward* crossing: it records an :class:`Alarm`,
-calls the user's ``on_alarm(alarm)`` and/or issues
-:class:`~gimwatch.errors.IllConditionedWarning` (:func:`warn_alarm`). The default threshold
-is the one :func:`gimwatch.metrics.conditioning.warn_if_ill_conditioned` documents:
-κ·eps = :data:`~gimwatch.metrics.conditioning.ILL_CONDITIONED_KAPPA_EPS`.
+The watch ([`Watch`][gimwatch.metrics.watch.Watch]) compares one watched metric with a
+threshold at every sample and acts once per *upward* crossing: it records an
+[`Alarm`][gimwatch.metrics.alarm.Alarm], calls the user's ``on_alarm(alarm)`` and/or issues
+[`IllConditionedWarning`][gimwatch.errors.IllConditionedWarning]
+([`warn_alarm`][gimwatch.metrics.alarm.warn_alarm]). The default threshold is the one
+[`warn_if_ill_conditioned`][gimwatch.metrics.conditioning.warn_if_ill_conditioned] documents: κ·eps
+= `ILL_CONDITIONED_KAPPA_EPS`.
 """
 
 from __future__ import annotations
@@ -70,5 +71,5 @@ def check_on_alarm(on_alarm: Callable[[Alarm], object] | None) -> None:
 
 
 def warn_alarm(alarm: Alarm, *, stacklevel: int = 2) -> None:
-    """Issue :class:`~gimwatch.errors.IllConditionedWarning` with the alarm's message."""
+    """Issue `IllConditionedWarning` with the alarm's message."""
     warnings.warn(alarm.message(), IllConditionedWarning, stacklevel=stacklevel + 1)

@@ -2,13 +2,13 @@
 
 Shah & Saha (2013) propose δ and αδ because κ₂ = λmax/λmin (Eq. 6) by a dense eigen-solve
 costs O(n³). Along a trajectory M(q) changes little from one sample to the next, and so do
-its extreme eigenpairs: the previous sample's are a near-perfect start. :class:`KappaTracker`
-tracks both ends with O(n) operators and thick-restart Lanczos
-(:mod:`gimwatch.metrics.tracker_krylov`), each end started from the previous sample's Ritz
-block plus one fresh seeded random probe (it has a component on every eigenvector, so a new
-leading eigenvector that appeared orthogonally to the block keeps the residual large until
-the basis has found it), converged on the Kato–Temple bound ‖r‖²/(θ · gap) ≤ rtol of each
-end (κ to about 2·rtol; default rtol = 1e-10).
+its extreme eigenpairs: the previous sample's are a near-perfect start.
+[`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] tracks both ends with O(n) operators and
+thick-restart Lanczos ([`gimwatch.metrics.tracker_krylov`][gimwatch.metrics.tracker_krylov]), each
+end started from the previous sample's Ritz block plus one fresh seeded random probe (it has a
+component on every eigenvector, so a new leading eigenvector that appeared orthogonally to the block
+keeps the residual large until the basis has found it), converged on the Kato–Temple bound ‖r‖²/(θ ·
+gap) ≤ rtol of each end (κ to about 2·rtol; default rtol = 1e-10).
 
 * **λmax**: Lanczos on M·x (inverse dynamics from rest).
 * **λmin**, on DeNOC's compiled model: shift-invert. The articulated-body factor of
@@ -20,6 +20,14 @@ end (κ to about 2·rtol; default rtol = 1e-10).
   where λmin and λ₂ of a long chain differ by 0.07 % — and λmin = σ + 1/θ keeps its relative
   accuracy (κ ~ 1e11 at n = 400). s follows the observed motion of λmin (10× the last
   relative change, at least 1e-8).
+* **λmin is certified at every sample** on DeNOC's model: M − λ(1 − 100·rtol)·1 must factor
+  with positive pivots, i.e. no eigenvalue lies below the reported one (Ritz values lie above
+  λmin, so it is then within 100·rtol of λmin). A warm Ritz block localised in one branch of
+  a tree cannot see a lower mode that appears in another branch (the two smallest eigenvalues
+  cross), and Lanczos converges to the old mode with a small error estimate; the certificate
+  catches it, and λmin is recovered by Sylvester bisection on the shift, then Lanczos just
+  below it (``fallback = "cold"``). One O(n) factorization more per sample (10–15 % of a
+  sample's time at n = 100–1000).
 * **λmin**, on other providers (Pinocchio's ABA, test operators): Lanczos on M⁻¹·y with a
   block of 8 Ritz vectors (the smallest eigenvalues of a long chain cluster; Rayleigh–Ritz
   on the tracked cluster resolves crossings inside it).
@@ -29,8 +37,9 @@ end (κ to about 2·rtol; default rtol = 1e-10).
 since the previous sample; it is then recomputed from a cold start (a new probe and the
 best current Ritz vectors, up to ``max_products``) and, if that does not converge either,
 from the dense matrix when a ``dense`` provider was given, else a
-:class:`~gimwatch.errors.ConditioningError` is raised. The first sample is a cold start.
-Each sample reports the products and factorizations it took (:class:`TrackedKappa`).
+[`ConditioningError`][gimwatch.errors.ConditioningError] is raised. The first sample is a cold
+start. Each sample reports the products and factorizations it took
+([`TrackedKappa`][gimwatch.metrics.tracker.TrackedKappa]).
 """
 
 from __future__ import annotations
@@ -98,9 +107,9 @@ class KappaTracker:
     Args:
         products: An object with ``configure(q)``, ``gim_product(x)`` (M·x) and
             ``gim_solve(y)`` (M⁻¹·y) at the configured q: a
-            :class:`gimwatch.denoc.lean.LeanModel` (``DenocModel.lean()``: compiled, with
-            shift-invert for λmin), or
-            :class:`gimwatch.metrics.tracker_providers.PinocchioProducts`.
+            [`gimwatch.denoc.lean.LeanModel`][gimwatch.denoc.LeanModel] (``DenocModel.lean()``:
+            compiled, with shift-invert for λmin), or
+            [`PinocchioProducts`][gimwatch.metrics.tracker_providers.PinocchioProducts].
         nv: Size of M.
         rtol: Relative tolerance on each extreme eigenvalue (the stopping rule).
         warm_products: Products per end the warm start may take before it counts as failed.
@@ -258,9 +267,9 @@ def track_kappa(products, configurations: npt.ArrayLike, **options) -> list[Trac
     """κ₂ at every configuration (rows of ``configurations``), in order, warm-started.
 
     Args:
-        products: See :class:`KappaTracker`.
+        products: See [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker].
         configurations: (samples, nq).
-        **options: Passed to :class:`KappaTracker`.
+        **options: Passed to [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker].
     """
     qs = np.atleast_2d(np.asarray(configurations, dtype=float))
     tracker = KappaTracker(products, products.nv, **options)

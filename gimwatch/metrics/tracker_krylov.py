@@ -1,12 +1,12 @@
 """The κ tracker's Krylov engine: thick-restart Lanczos for the leading eigenpair, compiled.
 
-One routine, :func:`leading`, serves every operator of :mod:`gimwatch.metrics.tracker`: the
-caller passes a block of start vectors (the warm start), and the basis grows Lanczos-style —
-each new vector is A times the previous one, orthogonalised twice against the basis (CGS2).
-Every ``check_every`` products, Rayleigh–Ritz on the whole basis gives the leading Ritz pair
-(θ, y) and its residual r = A y − θ y, which restarts the Lanczos sequence; a full basis
-(:data:`MAX_BASIS`) is thick-restarted on the ``keep`` leading Ritz vectors, whose products
-are combinations of the stored ones (no product is spent).
+One routine, [`leading`][gimwatch.metrics.tracker_krylov.leading], serves every operator of
+[`gimwatch.metrics.tracker`][gimwatch.metrics.tracker]: the caller passes a block of start vectors
+(the warm start), and the basis grows Lanczos-style — each new vector is A times the previous one,
+orthogonalised twice against the basis (CGS2). Every ``check_every`` products, Rayleigh–Ritz on the
+whole basis gives the leading Ritz pair (θ, y) and its residual r = A y − θ y, which restarts the
+Lanczos sequence; a full basis (`MAX_BASIS`) is thick-restarted on the ``keep`` leading Ritz
+vectors, whose products are combinations of the stored ones (no product is spent).
 
 Stopping rule: the Kato–Temple bound ‖r‖² / (θ · gap), gap = θ − θ₂ from the Ritz values,
 bounds the relative error of θ. For A = (M − σ·1)⁻¹ (shift-invert, θ = 1/(λ − σ)) the error
@@ -15,8 +15,9 @@ converged when ‖r‖² / (θ · gap · (1 + σθ)) ≤ rtol.
 
 The operator is either DeNOC's compiled products, called from inside the loop (no Python per
 product: ``which`` = 0 for M·x, 1 for (M − σ·1)⁻¹ y on the factor of
-:func:`gimwatch.denoc.fused.factor_shifted`), or, for other providers, a Python callable
-(:func:`leading_python`). Vectors are rows: ``V[j]`` is basis vector j, contiguous.
+`gimwatch.denoc.fused.factor_shifted`), or, for other providers, a Python callable
+([`leading_python`][gimwatch.metrics.tracker_krylov.leading_python]). Vectors are rows: ``V[j]`` is
+basis vector j, contiguous.
 """
 
 from __future__ import annotations
@@ -24,9 +25,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 
 from gimwatch.denoc import fused
+from gimwatch.jit import njit
 
 __all__ = ["MAX_BASIS", "Workspace", "leading", "leading_python"]
 
@@ -35,7 +36,7 @@ MAX_BASIS = 24
 
 
 class Workspace:
-    """Preallocated arrays of :func:`leading` for an operator of size n."""
+    """Preallocated arrays of `leading` for an operator of size n."""
 
     def __init__(self, n: int) -> None:
         size = min(MAX_BASIS, n)
@@ -45,7 +46,7 @@ class Workspace:
         self.vectors = np.zeros((3, n))  # product output, residual, scratch
 
     def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(V, AV, H, vectors), in :func:`leading`'s argument order."""
+        """(V, AV, H, vectors), in `leading`'s argument order."""
         return self.V, self.AV, self.H, self.vectors
 
 
@@ -222,7 +223,7 @@ def leading(
         budget: Most products to spend.
         keep: Ritz vectors to return (and to thick-restart on).
         check_every: Products between two Rayleigh–Ritz checks.
-        V: (size, n) basis workspace (:class:`Workspace`).
+        V: (size, n) basis workspace ([`Workspace`][gimwatch.metrics.tracker_krylov.Workspace]).
         AV: (size, n) products of the basis.
         H: (size, size) projected matrix.
         vectors: (3, n) scratch.
@@ -273,7 +274,7 @@ def leading_python(
     keep: int,
     check_every: int = 4,
 ) -> tuple[float, float, bool, int]:
-    """:func:`leading` for an operator given as a Python callable (σ = 0).
+    """`leading` for an operator given as a Python callable (σ = 0).
 
     Same algorithm and returns; for providers other than DeNOC's (Pinocchio's RNEA/ABA,
     test operators), one Python call per product.

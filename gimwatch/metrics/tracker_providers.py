@@ -1,15 +1,17 @@
 """Where the κ tracker and the watch's δ get their O(n) operators from.
 
-* :func:`lean_model` — DeNOC's compiled :class:`~gimwatch.denoc.lean.LeanModel` of a robot
-  (the backend's when it has one, else built once from the chain spec or the URDF), or None
-  when DeNOC cannot read the robot;
-* :func:`gim_products` — that model, or else :class:`PinocchioProducts`;
-* :class:`PinocchioProducts` — ``M(q) x = RNEA(q, 0, x)`` and ``M(q)⁻¹ y = ABA(q, 0, y)``
-  with gravity off (see :mod:`gimwatch.metrics.matrix_free`), behind the three methods
-  :class:`~gimwatch.metrics.tracker.KappaTracker` calls (``configure(q)``,
+* [`lean_model`][gimwatch.metrics.tracker_providers.lean_model] — DeNOC's compiled
+  [`LeanModel`][gimwatch.denoc.LeanModel] of a robot (the backend's when it has one, else built once
+  from the chain spec or the URDF), or None when DeNOC cannot read the robot;
+* [`gim_products`][gimwatch.metrics.tracker_providers.gim_products] — that model, or else
+  [`PinocchioProducts`][gimwatch.metrics.tracker_providers.PinocchioProducts];
+* [`PinocchioProducts`][gimwatch.metrics.tracker_providers.PinocchioProducts] — ``M(q) x = RNEA(q,
+  0, x)`` and ``M(q)⁻¹ y = ABA(q, 0, y)`` with gravity off (see
+  [`gimwatch.metrics.matrix_free`][gimwatch.metrics.matrix_free]), behind the three methods
+  [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] calls (``configure(q)``,
   ``gim_product(x)``, ``gim_solve(y)``): for robots DeNOC does not read, or to check one
-  implementation against the other. DeNOC's model is the cheaper provider: its products
-  reuse the configuration's kinematics and factor, Pinocchio's recompute them every call.
+  implementation against the other. DeNOC's model is the cheaper provider: its products reuse the
+  configuration's kinematics and factor, Pinocchio's recompute them every call.
 """
 
 from __future__ import annotations

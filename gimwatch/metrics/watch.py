@@ -1,12 +1,12 @@
 """The GIM watch: the requested conditioning metrics of M(q) at sample times, and alarms.
 
-Metrics come from :data:`METRICS`, keyed by the scene's names; a metric nobody watches is
+Metrics come from `METRICS`, keyed by the scene's names; a metric nobody watches is
 never built, so its cost is never paid. Per sample, the expensive quantities are computed
 at most once and only when a watched metric needs them:
 
-* ``diag M`` — from :func:`gimwatch.model.inertia.gim_diagonal` (O(n), no M formed) when no
-  watched metric needs the full matrix, else read off M;
-* ``M`` — from Pinocchio's CRBA (:func:`gimwatch.model.inertia.gim`), O(n²);
+* ``diag M`` — from [`gim_diagonal`][gimwatch.model.inertia.gim_diagonal]
+  (O(n), no M formed) when no watched metric needs the full matrix, else read off M;
+* ``M`` — from Pinocchio's CRBA ([`gim`][gimwatch.model.inertia.gim]), O(n²);
 * the spectrum — a symmetric eigen-solve, O(n³), only for ``kappa`` / ``eigenvalues``
   (and once, at t0, to calibrate α of ``scaled_diagonal_ratio``, Shah & Saha 2013 Eq. 15).
 """
@@ -54,7 +54,6 @@ __all__ = [
     "DEFAULT_METRICS",
     "METRICS",
     "OPERATOR_METRICS",
-    "Alarm",
     "EstimatorQuality",
     "Watch",
     "estimator_quality",
@@ -81,24 +80,28 @@ class Watch:
     """Evaluates the requested metrics at samples and raises alarms, in any loop.
 
     Build it from what the loop has: ``Watch(robot, metrics)`` (a gimwatch
-    :class:`~gimwatch.model.robots.Robot`), :meth:`from_model` (a ``pinocchio.Model``),
-    :meth:`from_mujoco` (a MuJoCo ``MjModel``/``MjData`` pair) or :meth:`from_matrices` (M
-    or diag M fed by hand). Sample with :meth:`sample` (a configuration ``q``),
-    :meth:`sample_matrix` (M) or :meth:`sample_diagonal` (diag M); read the series with
-    :meth:`array`, :meth:`arrays` or :meth:`to_dataframe`.
+    [`Robot`][gimwatch.model.robots.Robot]), [`from_model`][gimwatch.metrics.watch.Watch.from_model]
+    (a ``pinocchio.Model``), [`from_mujoco`][gimwatch.metrics.watch.Watch.from_mujoco] (a MuJoCo
+    ``MjModel``/``MjData`` pair) or [`from_matrices`][gimwatch.metrics.watch.Watch.from_matrices] (M
+    or diag M fed by hand). Sample with [`sample`][gimwatch.metrics.watch.Watch.sample] (a
+    configuration ``q``), [`sample_matrix`][gimwatch.metrics.watch.Watch.sample_matrix] (M) or
+    [`sample_diagonal`][gimwatch.metrics.watch.Watch.sample_diagonal] (diag M); read the series with
+    [`array`][gimwatch.metrics.watch.Watch.array], [`arrays`][gimwatch.metrics.watch.Watch.arrays]
+    or [`to_dataframe`][gimwatch.metrics.watch.Watch.to_dataframe].
 
     Args:
         robot: The robot; None when ``dynamics`` is a source that gives ``nv`` (MuJoCo, matrices).
-        metrics: Names from :data:`METRICS`; only these are built and evaluated.
+        metrics: Names from `METRICS`; only these are built and evaluated.
         alarm_metric: One of ``metrics`` (or None for no alarm).
         alarm_threshold: Threshold on the metric's condition-number scale; default
-            :data:`DEFAULT_ALARM_THRESHOLD` (κ·eps = 1e-2).
-        on_alarm: Called with the :class:`Alarm` at each upward crossing.
-        warn: Issue :class:`~gimwatch.errors.IllConditionedWarning` at each upward crossing;
-            None: when no ``on_alarm`` is given.
+            `DEFAULT_ALARM_THRESHOLD` (κ·eps = 1e-2).
+        on_alarm: Called with the [`Alarm`][gimwatch.metrics.alarm.Alarm] at each upward crossing.
+        warn: Issue [`IllConditionedWarning`][gimwatch.errors.IllConditionedWarning] at each upward
+            crossing; None: when no ``on_alarm`` is given.
         dynamics: Where M(q) and diag M(q) come from: an object with ``gim(q)`` and
             ``gim_diagonal(q)`` (a simulation passes its backend, so that a long chain on
-            ``denoc`` never builds a Pinocchio Data; see :mod:`gimwatch.metrics.watch_sources`);
+            ``denoc`` never builds a Pinocchio Data; see
+            [`gimwatch.metrics.watch_sources`][gimwatch.metrics.watch_sources]);
             None: Pinocchio, with a Data of its own.
 
     Raises:
@@ -185,9 +188,9 @@ class Watch:
     ) -> Watch:
         """A watch on a ``pinocchio.Model`` (M from Pinocchio's CRBA; δ without forming M).
 
-        Sample with :meth:`sample` (``q`` of length ``model.nq``). ``options``: the alarm
-        arguments of :class:`Watch` (``alarm_metric``, ``alarm_threshold``, ``on_alarm``,
-        ``warn``).
+        Sample with [`sample`][gimwatch.metrics.watch.Watch.sample] (``q`` of length ``model.nq``).
+        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch]
+        (``alarm_metric``, ``alarm_threshold``, ``on_alarm``, ``warn``).
         """
         return cls(robot_from_model(model), metrics, **options)
 
@@ -208,8 +211,8 @@ class Watch:
         the step started); ``sample(t, qpos)`` computes M at ``qpos`` without touching
         ``data``. ``robot`` (a gimwatch Robot or ``pinocchio.Model``) maps MuJoCo's joints by
         name into its coordinates; ``armature=False`` removes MuJoCo's ``dof_armature`` from
-        the diagonal (see :class:`~gimwatch.metrics.watch_sources.MujocoSource`).
-        ``options``: the alarm arguments of :class:`Watch`.
+        the diagonal (see [`MujocoSource`][gimwatch.metrics.watch_sources.MujocoSource]).
+        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch].
         """
         source = MujocoSource(model, data, robot=robot, armature=armature)
         return cls(None, metrics, dynamics=source, **options)
@@ -223,9 +226,9 @@ class Watch:
         dof_names: tuple[str, ...] | None = None,
         **options: Any,
     ) -> Watch:
-        """A watch fed by hand: :meth:`sample_matrix` (M) or :meth:`sample_diagonal` (diag M).
+        """A watch fed by hand: `sample_matrix` (M) or `sample_diagonal` (diag M).
 
-        ``options``: the alarm arguments of :class:`Watch`.
+        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch].
         """
         return cls(None, metrics, dynamics=GivenMatrix(nv, dof_names), **options)
 
@@ -233,8 +236,9 @@ class Watch:
     def sample(self, t: float, q: npt.ArrayLike | None = None) -> Alarm | None:
         """Record the watched metrics of M(q) at time ``t`` (s); return a new alarm, if any.
 
-        ``q`` is the configuration (length nq; MuJoCo's ``qpos`` for :meth:`from_mujoco`,
-        where it may be omitted to read the M held in ``data``).
+        ``q`` is the configuration (length nq; MuJoCo's ``qpos`` for
+        [`from_mujoco`][gimwatch.metrics.watch.Watch.from_mujoco], where it may be omitted to read
+        the M held in ``data``).
         """
         if not self.metrics:
             return None
@@ -299,7 +303,7 @@ class Watch:
         """Q checked by one compiled pass when already a float vector of nq, else copied.
 
         The compiled path only reads q, so a good float vector is not copied; anything else
-        goes through :func:`as_configuration` (a checked copy, or the error naming the fault).
+        goes through `as_configuration` (a checked copy, or the error naming the fault).
         """
         stops, sizes, _, nq = self._blocks
         if (
@@ -332,7 +336,7 @@ class Watch:
     def _fast_values(self, source, q) -> list | None:
         """The watched values by the compiled path, or None: then the checked path decides.
 
-        κ: one scaled eigen-solve (:func:`~gimwatch.model.kernels.scaled_spectrum`); a NaN or
+        κ: one scaled eigen-solve (`scaled_spectrum`); a NaN or
         non-positive λmin sends the sample to the checked path, which names the problem, so
         the checks cost nothing on a good M. δ: one compiled call on the diagonal.
         """
@@ -458,6 +462,50 @@ class Watch:
         from gimwatch.output.dataframe import watch_frame
 
         return watch_frame(self.arrays())
+
+    def plot(self, metrics: tuple[str, ...] | None = None, *, ax=None):
+        """The watched scalar metrics over time on a log axis, with the alarm threshold.
+
+        For the own-loop case, the figure a results folder has for ``simulate``
+        (`gimwatch.output.figures.plot_watch`). Vector metrics (eigenvalues, diagonal)
+        are left out.
+
+        Args:
+            metrics: Which watched metrics (default: every scalar one).
+            ax: Matplotlib Axes to draw on (a new figure's when None).
+
+        Returns:
+            The Axes.
+        """
+        from gimwatch.output.figures import plot_watch
+
+        scalar = [name for name, metric in self.metrics.items() if not metric.vector]
+        chosen = scalar if metrics is None else list(metrics)
+        unknown = [n for n in chosen if n not in scalar]
+        if unknown or not chosen:
+            raise InputError("the metrics to plot", f"watched scalar metrics {scalar}", unknown)
+        threshold = None
+        if self.alarm_metric in chosen:  # drawn where the metric's value is its severity
+            severity = self.metrics[self.alarm_metric].severity
+            if severity(self.alarm_threshold) == self.alarm_threshold:
+                threshold = self.alarm_threshold
+        series = {name: self.array(name) for name in chosen}
+        return plot_watch(
+            self.array("t"), series, alarm_metric=self.alarm_metric, threshold=threshold, ax=ax
+        )
+
+    def __repr__(self) -> str:
+        """One line: the robot, the metrics, the samples taken and the alarm."""
+        robot = self.robot.name if self.robot is not None else type(self.dynamics).__name__
+        alarm = (
+            f", alarm={self.alarm_metric} > {self.alarm_threshold:.3g}"
+            if self.alarm_metric is not None
+            else ""
+        )
+        return (
+            f"Watch(robot={robot!r}, metrics={list(self.metrics)}, samples={len(self.times)}, "
+            f"alarms={len(self.alarms)}{alarm})"
+        )
 
 
 #: Above this nv a κ-only watch solves with NumPy's ``eigvalsh`` (after the compiled scale

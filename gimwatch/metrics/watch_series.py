@@ -3,7 +3,7 @@
 A sample writes one row into preallocated arrays (capacity doubled when full), never a
 Python list per sample. Each named series is a scalar column or, for vector metrics
 (``eigenvalues``, ``diagonal``), a 2-D array (samples × nv). New named series (a per-sample
-fallback flag, an error bound) are one more entry of the dict: :meth:`WatchSeries.add`.
+fallback flag, an error bound) are one more entry of the dict: `add`.
 """
 
 from __future__ import annotations

@@ -1,19 +1,21 @@
 """Where a watch gets M(q) in a loop gimwatch does not own: MuJoCo, a Pinocchio model, a matrix.
 
-Each source offers what :class:`~gimwatch.metrics.watch.Watch` asks of its ``dynamics``:
+Each source offers what [`Watch`][gimwatch.metrics.watch.Watch] asks of its ``dynamics``:
 ``nv``, ``dof_names``, ``gim(q)`` (the full M) and ``gim_diagonal(q)`` (diag M only, O(n),
 no M formed), so that a metric nobody watches is never paid for.
 
-* :class:`MujocoSource` — M from a MuJoCo ``MjModel``/``MjData`` pair. With ``q=None`` it
-  reads the M that MuJoCo already holds in the user's ``data`` (``mujoco.mj_fullM``, or
-  the diagonal entries of ``data.M`` alone): no dynamics is recomputed. MuJoCo computes M
-  at the start of ``mj_step``, before integrating, so after ``mj_step`` it is M at the
-  configuration the step started from; after ``mj_forward`` it is M at ``data.qpos``.
-  With ``q`` given (MuJoCo's ``qpos`` layout) M is computed at ``q`` on a private
+* [`MujocoSource`][gimwatch.metrics.watch_sources.MujocoSource] — M from a MuJoCo
+  ``MjModel``/``MjData`` pair. With ``q=None`` it reads the M that MuJoCo already holds in the
+  user's ``data`` (``mujoco.mj_fullM``, or the diagonal entries of ``data.M`` alone): no dynamics is
+  recomputed. MuJoCo computes M at the start of ``mj_step``, before integrating, so after
+  ``mj_step`` it is M at the configuration the step started from; after ``mj_forward`` it is M at
+  ``data.qpos``. With ``q`` given (MuJoCo's ``qpos`` layout) M is computed at ``q`` on a private
   ``MjData`` and the user's ``data`` is left untouched.
-* :class:`GivenMatrix` — the M (or diag M) the caller already holds.
-* :func:`robot_from_model` — a ``pinocchio.Model`` wrapped as a gimwatch
-  :class:`~gimwatch.model.robots.Robot` (M from Pinocchio's CRBA, diag M without M).
+* [`GivenMatrix`][gimwatch.metrics.watch_sources.GivenMatrix] — the M (or diag M) the caller already
+  holds.
+* [`robot_from_model`][gimwatch.metrics.watch_sources.robot_from_model] — a ``pinocchio.Model``
+  wrapped as a gimwatch [`Robot`][gimwatch.model.robots.Robot] (M from Pinocchio's CRBA, diag M
+  without M).
 
 What MuJoCo's M contains besides the rigid bodies: ``dof_armature`` on the diagonal,
 ``tendon_armature`` (Jₜᵀ a Jₜ) and ``actuator_armature``; ``armature=False`` removes
@@ -75,7 +77,7 @@ def real_array(value: npt.ArrayLike, name: str) -> np.ndarray:
 
 
 def robot_from_model(model: pin.Model, *, name: str | None = None) -> Robot:
-    """A gimwatch :class:`Robot` around a ``pinocchio.Model`` (kept, not copied).
+    """A gimwatch `Robot` around a ``pinocchio.Model`` (kept, not copied).
 
     Raises:
         InputError: ``model`` is not a ``pinocchio.Model``, or has no velocity coordinate.
@@ -163,8 +165,9 @@ class MujocoSource:
     Args:
         model: The ``mujoco.MjModel``.
         data: Its ``mujoco.MjData`` (the one the user's loop steps).
-        robot: A gimwatch :class:`Robot` or ``pinocchio.Model`` of the same robot: M is then
-            given in its coordinates (joints mapped by name, free-joint frame converted).
+        robot: A gimwatch [`Robot`][gimwatch.model.robots.Robot] or ``pinocchio.Model`` of the same
+            robot: M is then given in its coordinates (joints mapped by name, free-joint frame
+                converted).
             None: MuJoCo's coordinates and joint names.
         armature: Keep MuJoCo's ``dof_armature`` on the diagonal (True) or remove it.
 

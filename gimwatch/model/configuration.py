@@ -15,7 +15,7 @@ quaternion (nq = 4, nv = 3). A user writes q in *user coordinates*:
   angle); joints not named stay at the default.
 
 Every unit-norm block (a continuous joint's (cos, sin), a quaternion) must have norm 1
-within :data:`UNIT_TOLERANCE` and is then normalised; a zero or far-from-unit block is
+within `UNIT_TOLERANCE` and is then normalised; a zero or far-from-unit block is
 refused naming the joint. Errors are built by the caller's ``error(key, problem)``, so the
 scene reader and the command line name the file, the key and the joint their own way.
 """

@@ -3,17 +3,17 @@
 Small numba kernels (cached on disk, so only the first run ever compiles them) that the
 watch calls once per sample instead of several NumPy reductions around a LAPACK call:
 
-* :func:`scaled_spectrum` — the eigenvalues of M / s, s a power of two near max M_ii,
+* `scaled_spectrum` — the eigenvalues of M / s, s a power of two near max M_ii,
   ascending (LAPACK's symmetric solver, called from compiled code without NumPy's wrapper).
   Scaling first keeps a finite M finite: ``[[2, 1], [1, 2]] · 8e307`` has κ = 3, not inf.
   κ = λmax / λmin needs no rescaling (Shah & Saha 2013, Eq. 6). A bad M gives a NaN or
   non-positive spectrum (or LinAlgError): the caller's checked path then names the
   problem, so the check costs nothing when M is good.
-* :func:`spectrum_scale` — that s, from the diagonal alone.
-* :func:`spectrum_ratio` — κ alone from that spectrum, NaN when M is not finite and > 0.
-* :func:`positive_ratio` — max / min of a vector (δ, Sec. 4), NaN unless every entry is
+* `spectrum_scale` — that s, from the diagonal alone.
+* `spectrum_ratio` — κ alone from that spectrum, NaN when M is not finite and > 0.
+* `positive_ratio` — max / min of a vector (δ, Sec. 4), NaN unless every entry is
   finite and > 0.
-* :func:`unit_block_fault` — the first unit block of q (a quaternion, a continuous joint's
+* `unit_block_fault` — the first unit block of q (a quaternion, a continuous joint's
   (cos θ, sin θ)) whose norm is not 1, or a non-finite entry, in one pass without a Python
   loop over joints.
 """
@@ -41,7 +41,7 @@ SAFE_LOW, SAFE_HIGH = 2.0**-400, 2.0**400
 
 @njit(cache=True)
 def spectrum_scale(M):  # pragma: no cover - compiled
-    """The s of :func:`scaled_spectrum` from diag M (n reads, not n²); NaN if it is not > 0.
+    """The s of `scaled_spectrum` from diag M (n reads, not n²); NaN if it is not > 0.
 
     For a positive definite M, |M_ij| <= sqrt(M_ii M_jj) <= max M_ii, so the diagonal bounds
     every entry. An M that is not (huge off-diagonal entries, NaN off the diagonal) gives
@@ -62,7 +62,7 @@ def spectrum_scale(M):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def scaled_spectrum(M):  # pragma: no cover - compiled
-    """(eigenvalues of M / s ascending, s), s = 2^k <= max M_ii < 2^(k+1) (:func:`spectrum_scale`).
+    """(eigenvalues of M / s ascending, s), s = 2^k <= max M_ii < 2^(k+1) (`spectrum_scale`).
 
     M is read, not written (symmetric, lower triangle used). A diagonal entry <= 0 or not
     finite gives a NaN spectrum; NaN off the diagonal raises LAPACK's LinAlgError.
@@ -77,7 +77,7 @@ def scaled_spectrum(M):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def spectrum_ratio(M):  # pragma: no cover - compiled
-    """κ = λmax / λmin of M (Eq. 6) by :func:`scaled_spectrum`; NaN unless M is finite and > 0."""
+    """κ = λmax / λmin of M (Eq. 6) by `scaled_spectrum`; NaN unless M is finite and > 0."""
     spectrum, _ = scaled_spectrum(M)
     low = spectrum[0]
     if not low > 0.0:

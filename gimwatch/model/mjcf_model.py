@@ -1,7 +1,7 @@
 """MJCF files read by Pinocchio's MJCF parser: recognising them, and a floating base for them.
 
-The values are checked first (:mod:`gimwatch.model.mjcf_values`); Pinocchio's complaints
-become one :class:`~gimwatch.errors.URDFError` naming the file.
+The values are checked first (`gimwatch.model.mjcf_values`); Pinocchio's complaints
+become one [`URDFError`][gimwatch.errors.URDFError] naming the file.
 """
 
 from __future__ import annotations

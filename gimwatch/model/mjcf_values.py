@@ -5,7 +5,7 @@ becomes 0, an axis of ``"0 one 0"`` becomes a zero axis, an ``<include>`` is ski
 when the file exists, leaves an empty tree). These checks refuse such files with one line
 naming the file, the body or joint, and the attribute; principal moments of inertia that
 violate the triangle inequality (a body no rigid material can make, which MuJoCo itself
-refuses) give one :class:`~gimwatch.errors.URDFWarning`, as for URDF.
+refuses) give one [`URDFWarning`][gimwatch.errors.URDFWarning], as for URDF.
 
 Attributes set through ``<default>`` classes are not resolved: an attribute absent from an
 element is left to the parser.
@@ -27,7 +27,7 @@ __all__ = ["MJCF_JOINT_TYPES", "check_mjcf"]
 #: Joint types of MJCF that Pinocchio's parser turns into joints.
 MJCF_JOINT_TYPES = ("hinge", "slide", "ball", "free")
 
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")  # unambiguous: linear
 #: Attribute -> how many numbers it holds, for the elements whose values reach M(q).
 _COUNTS = {
     "body": {"pos": 3, "quat": 4, "euler": 3},

@@ -1,4 +1,4 @@
-"""Turn a robot specification into a :class:`Robot` (a Pinocchio model plus what it came from).
+"""Turn a robot specification into a `Robot` (a Pinocchio model plus what it came from).
 
 A specification is one of:
 
@@ -11,9 +11,13 @@ A specification is one of:
 DeNOC reads URDF only: an MJCF robot has ``urdf_xml == ""`` and its text in ``mjcf_xml``;
 ``gimwatch crosscheck`` then compares Pinocchio with MuJoCo (docs/robots.md).
 
-The base is fixed unless ``floating=True``, which adds Pinocchio's free-flyer root joint.
-No :class:`pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
-nv = 300), so callers ask for it with :meth:`Robot.new_data` only when they need it.
+The base is the one example-robot-data's loader gives a robot of its own (a free-flyer for
+legged robots, humanoids and drones, as ``example_robot_data.load(name)`` builds them; see
+`default_floating`), and fixed for chains and files; ``floating=True`` adds Pinocchio's
+free-flyer root joint, ``floating=False`` fixes the base.
+No `pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
+nv = 300), so callers ask for it with [`Robot.new_data`][gimwatch.model.robots.Robot.new_data] only
+when they need it.
 """
 
 from __future__ import annotations
@@ -56,6 +60,7 @@ __all__ = [
     "captured_c_output",
     "chain_robot",
     "check_random_budget",
+    "default_floating",
     "example_robot_names",
     "is_mjcf",
     "load_robot",
@@ -133,7 +138,7 @@ class Robot:
         return tuple(self.model.names[1:])
 
     def new_data(self) -> pin.Data:
-        """A fresh :class:`pinocchio.Data`; refuses models whose Data would not fit in memory."""
+        """A fresh `pinocchio.Data`; refuses models whose Data would not fit in memory."""
         if self.nv > DATA_NV_LIMIT:
             raise _too_large(self.spec, self.nv)
         return self.model.createData()
@@ -151,11 +156,31 @@ def _read_urdf(path: Path) -> str:
         size = path.stat().st_size
         if size > MAX_URDF_BYTES:
             raise URDFError(str(path), f"is {size} bytes, more than {MAX_URDF_BYTES} for a URDF")
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise URDFError(str(path), f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
+        return decode_xml(path.read_bytes(), str(path))
     except OSError as exc:
         raise URDFError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
+
+
+def decode_xml(data: bytes, source: str) -> str:
+    """XML bytes as text: UTF-8 without a byte-order mark, or the declared encoding.
+
+    CAD exporters write ``<?xml version="1.0" encoding="ISO-8859-1"?>`` with accented
+    names in comments; a file that is neither is refused naming the first bad byte.
+    """
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        failure = exc
+    _, found, rest = data[:200].decode("ascii", errors="replace").partition("encoding=")
+    declared = rest[1:].split(rest[0], 1)[0] if found and rest[:1] in ("'", '"') else ""
+    try:
+        if declared and declared.lower().replace("_", "-") not in ("utf-8", "utf8"):
+            return data.decode(declared)
+    except (LookupError, UnicodeDecodeError):
+        pass
+    raise URDFError(
+        source, f"is not UTF-8 text ({failure.reason} at byte {failure.start})"
+    ) from failure
 
 
 def path_problem(path: Path) -> str:
@@ -168,10 +193,11 @@ def path_problem(path: Path) -> str:
     return "no such file"
 
 
-def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
-    from gimwatch.model.urdf_text import check_urdf
+def _build_model(xml: str, source: str, floating: bool) -> tuple[pin.Model, str]:
+    """Pinocchio's model of checked URDF text, and the text it read (normalised quirks)."""
+    from gimwatch.model.urdf_text import check_urdf_text
 
-    root = check_urdf(xml, source)
+    root, xml = check_urdf_text(xml, source, stacklevel=3)
     depth = _tree_depth(root)
     if depth > MAX_TREE_DEPTH:
         raise URDFError(
@@ -193,7 +219,7 @@ def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     if model is None or errors:
         detail = errors[0].removeprefix("Error:").strip() if errors else str(failure)
         raise URDFError(source, f"Pinocchio cannot build a model: {detail}")
-    return model
+    return model, xml
 
 
 def _tree_depth(root) -> int:
@@ -248,7 +274,7 @@ def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> 
 
 
 def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
-    """The :class:`ChainSpec` of a ``chain:N`` specification, or None for other specs."""
+    """The `ChainSpec` of a ``chain:N`` specification, or None for other specs."""
     match = _CHAIN_SPEC.match(str(spec))
     if not match:
         return None
@@ -259,17 +285,32 @@ def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
     return chain_spec(n)
 
 
-def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None = None) -> Robot:
+def default_floating(spec: str | Path) -> bool:
+    """The base a robot gets when none is asked for: True for a free-flyer.
+
+    An example-robot-data robot gets its loader's (``free_flyer``: legged robots, humanoids,
+    drones), so that ``load_robot(name)`` has the nq and nv of ``example_robot_data.load``;
+    chains and files get a fixed base.
+    """
+    loader = example_robot_loaders().get(str(spec))
+    return bool(getattr(loader, "free_flyer", False)) if loader is not None else False
+
+
+def load_robot(
+    spec: str | Path, floating: bool | None = None, *, max_nv: int | None = None
+) -> Robot:
     """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
 
     Args:
         spec: The robot specification (see the module docstring).
-        floating: Add a free-flyer root joint (6 DoF) instead of fixing the base.
+        floating: True adds a free-flyer root joint (6 DoF), False fixes the base; None (the
+            default): `default_floating`, example-robot-data's base for its robots
+            (a free-flyer for ``anymal``, ``solo12``, ``talos``, ...), fixed otherwise.
         max_nv: Refuse generated chains with more velocity coordinates than this before
             building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
 
     Returns:
-        The loaded :class:`Robot`.
+        The loaded [`Robot`][gimwatch.model.robots.Robot].
 
     Raises:
         RobotError: The spec names nothing loadable, or the model has no degree of freedom.
@@ -279,6 +320,8 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
     if not text.strip():
         raise InputError("the robot", "chain:N, a URDF path or an example-robot-data name", text)
     chain = parse_chain_spec(text)
+    if floating is None:
+        floating = chain is None and default_floating(text)
     if chain is not None:
         n = chain.n
         if max_nv is not None and n + 6 * floating > max_nv:
@@ -300,7 +343,7 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
         close = difflib.get_close_matches(text, example_robot_loaders(), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
-    model = _build_model(xml, source, floating)
+    model, xml = _build_model(xml, source, floating)
     if model.nv == 0:
         raise RobotError(
             text, "has no degree of freedom with a fixed base; load it with a floating base"
@@ -317,7 +360,7 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
 
 
 def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
-    """A :class:`Robot` for a generated chain of any rods (no Pinocchio Data is built).
+    """A `Robot` for a generated chain of any rods (no Pinocchio Data is built).
 
     Raises:
         RobotError: The chain is deeper than Pinocchio's URDF parser can read.
@@ -326,7 +369,7 @@ def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
         raise _too_deep(f"chain:{spec.n}")
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
-    model = _build_model(xml, source, floating)
+    model, xml = _build_model(xml, source, floating)
     return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
 
 
@@ -361,7 +404,7 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
     """Check that ``q`` is a finite real vector of length nq and return it as an array.
 
     Each unit block (a continuous joint's (cos θ, sin θ), a quaternion) must have norm 1
-    within :data:`UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
+    within `UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
     the joint (a zero rotation matrix) and giving a wrong M(q).
     """
     try:
