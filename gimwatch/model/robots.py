@@ -400,6 +400,20 @@ def unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
     return blocks
 
 
+def _unit_norms(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """The norm of every unit block of q, by one gather and one segmented sum (no joint loop)."""
+    gather = robot.__dict__.get("_unit_gather")
+    if gather is None:
+        stops, sizes, _ = unit_blocks(robot)
+        index = np.concatenate(
+            [np.arange(stop - size, stop) for stop, size in zip(stops, sizes, strict=True)]
+        )
+        gather = (index, np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp))
+        object.__setattr__(robot, "_unit_gather", gather)  # frozen: a cache, not state
+    index, offsets = gather
+    return np.sqrt(np.add.reduceat(q[index] ** 2, offsets))
+
+
 def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
     """Check that ``q`` is a finite real vector of length nq and return it as an array.
 
@@ -416,18 +430,18 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
         raise InputError("q", "a vector of real numbers", str(exc)) from None
     if array.shape != (robot.nq,):
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
-    from gimwatch.model.kernels import unit_block_fault
-
-    stops, sizes, names = unit_blocks(robot)
-    fault = unit_block_fault(array, stops, sizes, UNIT_NORM_TOLERANCE)
-    if fault == -2:
+    if not np.all(np.isfinite(array)):
         raise InputError("q", "finite", array.tolist())
-    if fault >= 0:
-        stop, unit = int(stops[fault]), int(sizes[fault])
-        what = "quaternion" if unit == 4 else "(cos θ, sin θ)"
-        raise InputError(
-            f"the {what} of joint {names[fault]!r} in q",
-            f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
-            round(float(np.linalg.norm(array[stop - unit : stop])), 9),
-        )
+    stops, sizes, names = unit_blocks(robot)
+    if stops.size:
+        norms = _unit_norms(robot, array)
+        bad = np.flatnonzero(~(np.abs(norms - 1.0) <= UNIT_NORM_TOLERANCE))
+        if bad.size:
+            k = int(bad[0])
+            what = "quaternion" if sizes[k] == 4 else "(cos θ, sin θ)"
+            raise InputError(
+                f"the {what} of joint {names[k]!r} in q",
+                f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
+                round(float(norms[k]), 9),
+            )
     return array
