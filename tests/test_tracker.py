@@ -13,7 +13,7 @@ from gimwatch.crosscheck import denoc_model
 from gimwatch.denoc import DenocModel
 from gimwatch.errors import ConditioningError
 from gimwatch.metrics.tracker import KappaTracker, track_kappa
-from gimwatch.metrics.tracker_providers import PinocchioProducts
+from gimwatch.metrics.tracker.providers import PinocchioProducts
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import load_robot
 from gimwatch.simulation.scene import load_scene, parse_scene

@@ -70,6 +70,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; fixed "
         f"base); auto: denoc above nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
     )
+    # --explain (issue 25): the modes of λmin and λmax at each configuration, dense path only
+    parser.add_argument(
+        "--explain",
+        action="store_true",
+        help="also explain kappa: the joints and bodies of the lambda_min and lambda_max modes",
+    )
     parser.add_argument(
         "--metrics",
         help="comma-separated subset of kappa,diagonal_ratio,pivot_ratio_backward to compute "
@@ -87,7 +93,11 @@ def run(args: argparse.Namespace) -> int:
     if len(specs) == 1:
         analysis = _analysis(specs[0], args)
         _notes(analysis)
+        if args.explain:
+            return _print_explained(specs[0], analysis, args)
         return _print_one(analysis, args)
+    if args.explain:
+        raise InputError("--explain", "used with one robot", f"{len(specs)} robots")
     blocks: list[tuple[str, object, str]] = []
     progress = ItemProgress("analyze", len(specs))
     for spec in specs:
@@ -110,6 +120,8 @@ def _analysis(spec: str, args: argparse.Namespace):
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
     if linear and args.floating:
         raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
+    if args.explain and (linear or args.csv):
+        raise InputError("--explain", "used on the dense path, without --csv", True)
     return analyze(
         spec,
         args.q,
@@ -225,3 +237,24 @@ def _print_batch(blocks, args: argparse.Namespace) -> None:
     print(
         f"{len(blocks) - refused}/{len(blocks)} analysed" + (f", {refused} refused" * bool(refused))
     )
+
+
+def _print_explained(spec: str, analysis, args: argparse.Namespace) -> int:
+    """``--explain``: the analysis, and the modes of λmin and λmax at each configuration."""
+    from gimwatch.cli.explain import mode_lines
+    from gimwatch.explain.modes import gim_modes
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot(spec, floating=analysis.floating, max_nv=DATA_NV_LIMIT)
+    modes = [gim_modes(robot, r.q) for r in analysis.results]
+    if args.json:
+        records = [
+            {**r, "modes": m.to_dict()} for r, m in zip(_records(analysis), modes, strict=True)
+        ]
+        print(json_text({**_header(analysis), "configurations": records}))
+        return 0
+    _print_table(analysis)
+    for i, mode in enumerate(modes):
+        for line in mode_lines(mode):
+            print(f"config {i}: {line}")
+    return 0

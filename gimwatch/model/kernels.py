@@ -23,7 +23,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from gimwatch.jit import njit
 
 __all__ = [
     "positive_ratio",
@@ -39,7 +40,7 @@ _FINITE_MAX = np.finfo(np.float64).max
 SAFE_LOW, SAFE_HIGH = 2.0**-400, 2.0**400
 
 
-@njit(cache=True)
+@njit
 def spectrum_scale(M):  # pragma: no cover - compiled
     """The s of `scaled_spectrum` from diag M (n reads, not n²); NaN if it is not > 0.
 
@@ -60,7 +61,7 @@ def spectrum_scale(M):  # pragma: no cover - compiled
     return math.ldexp(1.0, math.frexp(scale)[1] - 1)  # 2^k <= scale: rounds nothing
 
 
-@njit(cache=True)
+@njit
 def scaled_spectrum(M):  # pragma: no cover - compiled
     """(eigenvalues of M / s ascending, s), s = 2^k <= max M_ii < 2^(k+1) (`spectrum_scale`).
 
@@ -75,7 +76,7 @@ def scaled_spectrum(M):  # pragma: no cover - compiled
     return np.linalg.eigvalsh(M * (1.0 / scale)), scale
 
 
-@njit(cache=True)
+@njit
 def spectrum_ratio(M):  # pragma: no cover - compiled
     """κ = λmax / λmin of M (Eq. 6) by `scaled_spectrum`; NaN unless M is finite and > 0."""
     spectrum, _ = scaled_spectrum(M)
@@ -85,7 +86,7 @@ def spectrum_ratio(M):  # pragma: no cover - compiled
     return spectrum[-1] / low
 
 
-@njit(cache=True)
+@njit
 def positive_ratio(values):  # pragma: no cover - compiled
     """Max / min of ``values``; NaN unless all are finite and > 0."""
     lo = np.inf
@@ -98,7 +99,7 @@ def positive_ratio(values):  # pragma: no cover - compiled
     return hi / lo
 
 
-@njit(cache=True)
+@njit
 def unit_block_fault(q, stops, sizes, tolerance):  # pragma: no cover - compiled
     """-1 when q is finite and every unit block has norm 1 within ``tolerance``.
 

@@ -1,15 +1,15 @@
 """The κ tracker on DeNOC's compiled model: one compiled call per warm sample, shift-invert λmin.
 
-[`DenocEnds`][gimwatch.metrics.tracker_denoc.DenocEnds] holds the tracker's own DeNOC buffers (the
+[`DenocEnds`][gimwatch.metrics.tracker.denoc.DenocEnds] holds the tracker's own DeNOC buffers (the
 LeanModel it was given keeps its configuration) and the state carried from sample to sample: each
 end's Ritz block, the last λmin and its last relative change. A warm sample is ONE compiled call,
-[`warm_sample`][gimwatch.metrics.tracker_denoc.warm_sample]: kinematics at q (Shah & Saha's DeNOC,
+[`warm_sample`][gimwatch.metrics.tracker.denoc.warm_sample]: kinematics at q (Shah & Saha's DeNOC,
 `gimwatch.denoc.fused`), Lanczos on M·x for λmax, the articulated factor of M − σ·1 with σ =
 λmin(previous)·(1 − s) (refactored with s × 100 while a pivot is not positive — Sylvester's law of
 inertia: then λmin ≤ σ — up to s = 1, the plain M⁻¹), and Lanczos on (M − σ·1)⁻¹ for λmin = σ + 1/θ.
 Cold starts (the first sample, and the detected failures of a warm one) run the same
 compiled pieces from Python: λmin first to 1e-7 on M⁻¹, then shift-invert to the tolerance.
-See [`gimwatch.metrics.tracker`][gimwatch.metrics.tracker] for the method and its stopping rule.
+See [`core`][gimwatch.metrics.tracker.core] for the method and its stopping rule.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 from gimwatch.denoc import fused
 from gimwatch.errors import ConditioningError
 from gimwatch.jit import njit
-from gimwatch.metrics.tracker_krylov import Workspace, leading
+from gimwatch.metrics.tracker.krylov import Workspace, leading
 
 __all__ = ["DenocEnds", "warm_sample"]
 
@@ -70,13 +70,13 @@ def warm_sample(
         state: [λmax, λmin, last relative change of λmin, probes used], updated in place when
             both ends succeed.
         params: [rtol, warm product budget, jump].
-        V: Krylov workspace ([`Workspace`][gimwatch.metrics.tracker_krylov.Workspace]), with AV,
+        V: Krylov workspace ([`Workspace`][gimwatch.metrics.tracker.krylov.Workspace]), with AV,
             H and vectors.
         AV: See V.
         H: See V.
         vectors: See V.
         stats: Receives the results
-            ([`DenocEnds.sample`][gimwatch.metrics.tracker_denoc.DenocEnds.sample]).
+            ([`DenocEnds.sample`][gimwatch.metrics.tracker.denoc.DenocEnds.sample]).
     """
     rtol, budget, jump = params[0], int(params[1]), params[2]
     used = int(state[3])
@@ -258,7 +258,7 @@ class DenocEnds:
     def sample(self, q: np.ndarray, tracker) -> list:
         """[(λmax, products, fallback, estimate), (λmin, …), factorizations] at q.
 
-        ``stats`` after [`warm_sample`][gimwatch.metrics.tracker_denoc.warm_sample]: λmax, its
+        ``stats`` after [`warm_sample`][gimwatch.metrics.tracker.denoc.warm_sample]: λmax, its
         estimate, converged, products (0–3); the same for λmin (4–7); σ, factorizations, M positive
         definite (8–10); a fallback is needed (11), for λmax (12), for λmin (13).
         """

@@ -4,7 +4,7 @@ Shah & Saha (2013) propose δ and αδ because κ₂ = λmax/λmin (Eq. 6) by a 
 costs O(n³). Along a trajectory M(q) changes little from one sample to the next, and so do
 its extreme eigenpairs: the previous sample's are a near-perfect start.
 [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] tracks both ends with O(n) operators and
-thick-restart Lanczos ([`gimwatch.metrics.tracker_krylov`][gimwatch.metrics.tracker_krylov]), each
+thick-restart Lanczos ([`gimwatch.metrics.tracker.krylov`][gimwatch.metrics.tracker.krylov]), each
 end started from the previous sample's Ritz block plus one fresh seeded random probe (it has a
 component on every eigenvector, so a new leading eigenvector that appeared orthogonally to the block
 keeps the residual large until the basis has found it), converged on the Kato–Temple bound ‖r‖²/(θ ·
@@ -53,8 +53,8 @@ import scipy.linalg
 
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.metrics.conditioning import extreme_ratio
-from gimwatch.metrics.tracker_denoc import DenocEnds
-from gimwatch.metrics.tracker_krylov import Workspace, leading_python
+from gimwatch.metrics.tracker.denoc import DenocEnds
+from gimwatch.metrics.tracker.krylov import Workspace, leading_python
 
 __all__ = ["KappaTracker", "TrackedKappa", "track_kappa"]
 
@@ -109,7 +109,7 @@ class KappaTracker:
             ``gim_solve(y)`` (M⁻¹·y) at the configured q: a
             [`gimwatch.denoc.lean.LeanModel`][gimwatch.denoc.LeanModel] (``DenocModel.lean()``:
             compiled, with shift-invert for λmin), or
-            [`PinocchioProducts`][gimwatch.metrics.tracker_providers.PinocchioProducts].
+            [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts].
         nv: Size of M.
         rtol: Relative tolerance on each extreme eigenvalue (the stopping rule).
         warm_products: Products per end the warm start may take before it counts as failed.
