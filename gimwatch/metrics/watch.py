@@ -34,13 +34,6 @@ from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quali
 from gimwatch.metrics.registry import METRICS, GimState
 from gimwatch.metrics.watch_series import WatchSeries
 from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
-from gimwatch.model.kernels import (
-    positive_ratio,
-    scaled_spectrum,
-    spectrum_ratio,
-    spectrum_scale,
-    unit_block_fault,
-)
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     UNIT_NORM_TOLERANCE,
@@ -165,6 +158,9 @@ class Watch:
         # the compiled path, once the first sample passed every check (see _fast_values)
         self._fast = bool(self.metrics) and FAST_METRICS.issuperset(self.metrics)
         self._names = tuple(self.metrics)
+        from gimwatch.model import kernels  # numba, imported when a watch is built, not before
+
+        self._kernels = kernels
         self._only_kappa = self._names == ("kappa",)
         self._blocks = (*unit_blocks(robot), robot.nq) if self._check_q else None
         self._matrix_watch = isinstance(dynamics, GivenMatrix)
@@ -311,7 +307,7 @@ class Watch:
             and type(q) is np.ndarray
             and q.dtype == np.float64
             and q.shape == (nq,)
-            and unit_block_fault(q, stops, sizes, UNIT_NORM_TOLERANCE) == -1
+            and self._kernels.unit_block_fault(q, stops, sizes, UNIT_NORM_TOLERANCE) == -1
         ):
             return q
         return as_configuration(self.robot, q)
@@ -350,18 +346,18 @@ class Watch:
     def _compiled_values(self, source, q) -> list | None:
         if self._only_kappa and self.nv > NUMPY_EIG_MIN_NV:  # NumPy's LAPACK is faster there
             M = self._gim(source, q)
-            scale = spectrum_scale(M)
+            scale = self._kernels.spectrum_scale(M)
             if not scale > 0.0:
                 return None
             values = np.linalg.eigvalsh(M if scale == 1.0 else M * (1.0 / scale))
             value = values[-1] / values[0]
             return [value] if value >= 1.0 else None
         if self._only_kappa:
-            value = spectrum_ratio(self._gim(source, q))
+            value = self._kernels.spectrum_ratio(self._gim(source, q))
             return [value] if value >= 1.0 else None  # NaN: the checked path names why
         if self.full:
             M = self._gim(source, q)
-            spectrum, scale = scaled_spectrum(M)
+            spectrum, scale = self._kernels.scaled_spectrum(M)
             low = spectrum[0]
             if not low > 0.0:
                 return None
@@ -374,14 +370,14 @@ class Watch:
                 elif name == "diagonal":
                     out.append(M.diagonal())
                 else:
-                    out.append(positive_ratio(M.diagonal()))
+                    out.append(self._kernels.positive_ratio(M.diagonal()))
             return out
         lean = self.lean if source is self.dynamics else source
         if self._names == ("diagonal_ratio",) and lean is not None:
             value = lean.diagonal_ratio(q)
             return [value] if 1.0 <= value < math.inf else None
         diag = self._diagonal(lean, source, q)
-        delta = positive_ratio(diag)
+        delta = self._kernels.positive_ratio(diag)
         if not delta >= 1.0:
             return None
         return [delta if name == "diagonal_ratio" else diag for name in self._names]

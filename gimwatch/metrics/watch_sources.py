@@ -36,7 +36,6 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import check_gim
-from gimwatch.model.kernels import positive_ratio
 from gimwatch.model.robots import Robot
 
 __all__ = [
@@ -116,6 +115,9 @@ class GivenMatrix:
         self.dof_names = tuple(str(n) for n in names)
         self._M: np.ndarray | None = None
         self._diag: np.ndarray | None = None
+        from gimwatch.model.kernels import positive_ratio  # numba: only for a matrix watch
+
+        self._positive_ratio = positive_ratio
 
     def hold_matrix(self, matrix: npt.ArrayLike) -> None:
         """Hold M for the next sample; checks it is real, of shape (nv, nv), finite, symmetric.
@@ -142,7 +144,7 @@ class GivenMatrix:
 
     def diagonal_ratio(self, q=None) -> float:
         """δ of the held diagonal; NaN (the watch's checked path) unless all are finite and > 0."""
-        return positive_ratio(self.gim_diagonal())
+        return self._positive_ratio(self.gim_diagonal())
 
     def gim(self, q=None) -> np.ndarray:
         """The held M."""
@@ -217,6 +219,9 @@ class MujocoSource:
             model.jnt_type[quaternion_joints] == joint_type.mjJNT_FREE, 3, 0
         )
         self._quaternions = np.asarray(starts, dtype=np.intp)[:, None] + np.arange(4)
+        from gimwatch.model.kernels import positive_ratio  # numba: only for a MuJoCo watch
+
+        self._positive_ratio = positive_ratio
         self._light = not extra  # kinematics + CRB suffice for M at a given q
         self._own = None
         self._order: np.ndarray | None = None
@@ -334,7 +339,7 @@ class MujocoSource:
         diag = self._data_at(q).M[self._diag_index]
         if self._armature is not None:
             diag = diag - self._armature
-        return positive_ratio(diag)
+        return self._positive_ratio(diag)
 
 
 def _rotation(quaternion_wxyz: np.ndarray) -> np.ndarray:
