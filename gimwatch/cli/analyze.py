@@ -6,7 +6,13 @@ import argparse
 import sys
 
 from gimwatch.cli._batch import expand_specs
-from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
+from gimwatch.cli._format import (
+    add_base_arguments,
+    add_mjcf_arguments,
+    non_negative_int,
+    positive_int,
+    table,
+)
 from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import GimwatchError, InputError
@@ -52,7 +58,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         nargs="+",
         metavar="Q",
-        help="configuration: nq numbers, a continuous joint by its angle (rad); default: neutral",
+        help="configuration: nq numbers, a continuous joint by its angle (rad); for MJCF, "
+        "MuJoCo's qpos; default: neutral",
     )
     parser.add_argument(
         "--random",
@@ -62,6 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
     add_base_arguments(parser)
+    add_mjcf_arguments(parser)
     add_output_arguments(parser, what="configurations")
     parser.add_argument(
         "--backend",
@@ -131,6 +139,8 @@ def _analysis(spec: str, args: argparse.Namespace):
         backend=args.backend,
         metrics=None if args.metrics is None else args.metrics.split(","),
         key="--q",
+        body=args.body,
+        armature=not args.no_armature,
     )
 
 
@@ -245,7 +255,13 @@ def _print_explained(spec: str, analysis, args: argparse.Namespace) -> int:
     from gimwatch.explain.modes import gim_modes
     from gimwatch.model.robots import load_robot
 
-    robot = load_robot(spec, floating=analysis.floating, max_nv=DATA_NV_LIMIT)
+    robot = load_robot(
+        spec,
+        floating=analysis.floating,
+        max_nv=DATA_NV_LIMIT,
+        body=args.body,
+        armature=not args.no_armature,
+    )
     modes = [gim_modes(robot, r.q) for r in analysis.results]
     if args.json:
         records = [
