@@ -68,6 +68,7 @@ __all__ = [
     "parse_chain_spec",
     "placeholder_limit_joints",
     "random_configurations",
+    "unit_blocks",
 ]
 
 _CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
@@ -410,6 +411,38 @@ def neutral_configuration(robot: Robot) -> np.ndarray:
 UNIT_NORM_TOLERANCE = 1e-6
 
 
+def unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Where q's unit blocks end, their sizes and joints: computed once per robot, kept on it."""
+    blocks = robot.__dict__.get("_unit_blocks")
+    if blocks is None:
+        found = [
+            (joint.idx_q + joint.nq, unit_block_size(joint), name)
+            for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True)
+            if unit_block_size(joint)
+        ]
+        blocks = (
+            np.array([b[0] for b in found], dtype=np.int64),
+            np.array([b[1] for b in found], dtype=np.int64),
+            tuple(b[2] for b in found),
+        )
+        object.__setattr__(robot, "_unit_blocks", blocks)  # frozen: a cache, not state
+    return blocks
+
+
+def _unit_norms(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """The norm of every unit block of q, by one gather and one segmented sum (no joint loop)."""
+    gather = robot.__dict__.get("_unit_gather")
+    if gather is None:
+        stops, sizes, _ = unit_blocks(robot)
+        index = np.concatenate(
+            [np.arange(stop - size, stop) for stop, size in zip(stops, sizes, strict=True)]
+        )
+        gather = (index, np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp))
+        object.__setattr__(robot, "_unit_gather", gather)  # frozen: a cache, not state
+    index, offsets = gather
+    return np.sqrt(np.add.reduceat(q[index] ** 2, offsets))
+
+
 def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
     """Check that ``q`` is a finite real vector of length nq and return it as an array.
 
@@ -428,16 +461,16 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
     if not np.all(np.isfinite(array)):
         raise InputError("q", "finite", array.tolist())
-    for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
-        unit = unit_block_size(joint)
-        if unit:
-            stop = joint.idx_q + joint.nq
-            norm = float(np.linalg.norm(array[stop - unit : stop]))
-            if not abs(norm - 1.0) <= UNIT_NORM_TOLERANCE:
-                what = "quaternion" if unit == 4 else "(cos θ, sin θ)"
-                raise InputError(
-                    f"the {what} of joint {name!r} in q",
-                    f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
-                    round(norm, 9),
-                )
+    stops, sizes, names = unit_blocks(robot)
+    if stops.size:
+        norms = _unit_norms(robot, array)
+        bad = np.flatnonzero(~(np.abs(norms - 1.0) <= UNIT_NORM_TOLERANCE))
+        if bad.size:
+            k = int(bad[0])
+            what = "quaternion" if sizes[k] == 4 else "(cos θ, sin θ)"
+            raise InputError(
+                f"the {what} of joint {names[k]!r} in q",
+                f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
+                round(float(norms[k]), 9),
+            )
     return array
