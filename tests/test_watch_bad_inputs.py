@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from gimwatch.errors import GimwatchError
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.mujoco_model import compile_robot
 from gimwatch.model.robots import load_robot
+from gimwatch.watch.watch import Watch
 
 
 def mjcf_path(name: str) -> str:

@@ -31,9 +31,9 @@ from threadpoolctl import threadpool_limits
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.metrics.tracker.providers import lean_model
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.mujoco_model import compile_robot
 from gimwatch.model.robots import load_robot
+from gimwatch.watch.watch import Watch
 
 __all__ = ["CHAIN_SIZES", "COLUMNS", "ROBOTS", "TRACKER_COLUMNS", "run"]
 

@@ -22,18 +22,9 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics.alarm import (
-    DEFAULT_ALARM_THRESHOLD,
-    Alarm,
-    alarm_threshold,
-    check_on_alarm,
-    warn_alarm,
-)
 from gimwatch.metrics.conditioning import ldlt_pivots
 from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.registry import METRICS, GimState
-from gimwatch.metrics.watch_series import WatchSeries
-from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     UNIT_NORM_TOLERANCE,
@@ -41,6 +32,15 @@ from gimwatch.model.robots import (
     as_configuration,
     unit_blocks,
 )
+from gimwatch.watch.alarm import (
+    DEFAULT_ALARM_THRESHOLD,
+    Alarm,
+    alarm_threshold,
+    check_on_alarm,
+    warn_alarm,
+)
+from gimwatch.watch.series import WatchSeries
+from gimwatch.watch.sources import GivenMatrix, MujocoSource, robot_from_model, type_name
 
 __all__ = [
     "DEFAULT_ALARM_THRESHOLD",
@@ -73,14 +73,14 @@ class Watch:
     """Evaluates the requested metrics at samples and raises alarms, in any loop.
 
     Build it from what the loop has: ``Watch(robot, metrics)`` (a gimwatch
-    [`Robot`][gimwatch.model.robots.Robot]), [`from_model`][gimwatch.metrics.watch.Watch.from_model]
-    (a ``pinocchio.Model``), [`from_mujoco`][gimwatch.metrics.watch.Watch.from_mujoco] (a MuJoCo
-    ``MjModel``/``MjData`` pair) or [`from_matrices`][gimwatch.metrics.watch.Watch.from_matrices] (M
-    or diag M fed by hand). Sample with [`sample`][gimwatch.metrics.watch.Watch.sample] (a
-    configuration ``q``), [`sample_matrix`][gimwatch.metrics.watch.Watch.sample_matrix] (M) or
-    [`sample_diagonal`][gimwatch.metrics.watch.Watch.sample_diagonal] (diag M); read the series with
-    [`array`][gimwatch.metrics.watch.Watch.array], [`arrays`][gimwatch.metrics.watch.Watch.arrays]
-    or [`to_dataframe`][gimwatch.metrics.watch.Watch.to_dataframe].
+    [`Robot`][gimwatch.model.robots.Robot]), [`from_model`][gimwatch.watch.watch.Watch.from_model]
+    (a ``pinocchio.Model``), [`from_mujoco`][gimwatch.watch.watch.Watch.from_mujoco] (a MuJoCo
+    ``MjModel``/``MjData`` pair) or [`from_matrices`][gimwatch.watch.watch.Watch.from_matrices] (M
+    or diag M fed by hand). Sample with [`sample`][gimwatch.watch.watch.Watch.sample] (a
+    configuration ``q``), [`sample_matrix`][gimwatch.watch.watch.Watch.sample_matrix] (M) or
+    [`sample_diagonal`][gimwatch.watch.watch.Watch.sample_diagonal] (diag M); read the series with
+    [`array`][gimwatch.watch.watch.Watch.array], [`arrays`][gimwatch.watch.watch.Watch.arrays]
+    or [`to_dataframe`][gimwatch.watch.watch.Watch.to_dataframe].
 
     Args:
         robot: The robot; None when ``dynamics`` is a source that gives ``nv`` (MuJoCo, matrices).
@@ -88,13 +88,13 @@ class Watch:
         alarm_metric: One of ``metrics`` (or None for no alarm).
         alarm_threshold: Threshold on the metric's condition-number scale; default
             `DEFAULT_ALARM_THRESHOLD` (κ·eps = 1e-2).
-        on_alarm: Called with the [`Alarm`][gimwatch.metrics.alarm.Alarm] at each upward crossing.
+        on_alarm: Called with the [`Alarm`][gimwatch.watch.alarm.Alarm] at each upward crossing.
         warn: Issue [`IllConditionedWarning`][gimwatch.errors.IllConditionedWarning] at each upward
             crossing; None: when no ``on_alarm`` is given.
         dynamics: Where M(q) and diag M(q) come from: an object with ``gim(q)`` and
             ``gim_diagonal(q)`` (a simulation passes its backend, so that a long chain on
             ``denoc`` never builds a Pinocchio Data; see
-            [`gimwatch.metrics.watch_sources`][gimwatch.metrics.watch_sources]);
+            [`gimwatch.watch.sources`][gimwatch.watch.sources]);
             None: Pinocchio, with a Data of its own.
 
     Raises:
@@ -184,8 +184,8 @@ class Watch:
     ) -> Watch:
         """A watch on a ``pinocchio.Model`` (M from Pinocchio's CRBA; δ without forming M).
 
-        Sample with [`sample`][gimwatch.metrics.watch.Watch.sample] (``q`` of length ``model.nq``).
-        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch]
+        Sample with [`sample`][gimwatch.watch.watch.Watch.sample] (``q`` of length ``model.nq``).
+        ``options``: the alarm arguments of [`Watch`][gimwatch.watch.watch.Watch]
         (``alarm_metric``, ``alarm_threshold``, ``on_alarm``, ``warn``).
         """
         return cls(robot_from_model(model), metrics, **options)
@@ -207,8 +207,8 @@ class Watch:
         the step started); ``sample(t, qpos)`` computes M at ``qpos`` without touching
         ``data``. ``robot`` (a gimwatch Robot or ``pinocchio.Model``) maps MuJoCo's joints by
         name into its coordinates; ``armature=False`` removes MuJoCo's ``dof_armature`` from
-        the diagonal (see [`MujocoSource`][gimwatch.metrics.watch_sources.MujocoSource]).
-        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch].
+        the diagonal (see [`MujocoSource`][gimwatch.watch.sources.MujocoSource]).
+        ``options``: the alarm arguments of [`Watch`][gimwatch.watch.watch.Watch].
         """
         source = MujocoSource(model, data, robot=robot, armature=armature)
         return cls(None, metrics, dynamics=source, **options)
@@ -224,7 +224,7 @@ class Watch:
     ) -> Watch:
         """A watch fed by hand: `sample_matrix` (M) or `sample_diagonal` (diag M).
 
-        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch].
+        ``options``: the alarm arguments of [`Watch`][gimwatch.watch.watch.Watch].
         """
         return cls(None, metrics, dynamics=GivenMatrix(nv, dof_names), **options)
 
@@ -233,7 +233,7 @@ class Watch:
         """Record the watched metrics of M(q) at time ``t`` (s); return a new alarm, if any.
 
         ``q`` is the configuration (length nq; MuJoCo's ``qpos`` for
-        [`from_mujoco`][gimwatch.metrics.watch.Watch.from_mujoco], where it may be omitted to read
+        [`from_mujoco`][gimwatch.watch.watch.Watch.from_mujoco], where it may be omitted to read
         the M held in ``data``).
         """
         if not self.metrics:

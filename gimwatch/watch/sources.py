@@ -1,19 +1,19 @@
 """Where a watch gets M(q) in a loop gimwatch does not own: MuJoCo, a Pinocchio model, a matrix.
 
-Each source offers what [`Watch`][gimwatch.metrics.watch.Watch] asks of its ``dynamics``:
+Each source offers what [`Watch`][gimwatch.watch.watch.Watch] asks of its ``dynamics``:
 ``nv``, ``dof_names``, ``gim(q)`` (the full M) and ``gim_diagonal(q)`` (diag M only, O(n),
 no M formed), so that a metric nobody watches is never paid for.
 
-* [`MujocoSource`][gimwatch.metrics.watch_sources.MujocoSource] — M from a MuJoCo
+* [`MujocoSource`][gimwatch.watch.sources.MujocoSource] — M from a MuJoCo
   ``MjModel``/``MjData`` pair. With ``q=None`` it reads the M that MuJoCo already holds in the
   user's ``data`` (``mujoco.mj_fullM``, or the diagonal entries of ``data.M`` alone): no dynamics is
   recomputed. MuJoCo computes M at the start of ``mj_step``, before integrating, so after
   ``mj_step`` it is M at the configuration the step started from; after ``mj_forward`` it is M at
   ``data.qpos``. With ``q`` given (MuJoCo's ``qpos`` layout) M is computed at ``q`` on a private
   ``MjData`` and the user's ``data`` is left untouched.
-* [`GivenMatrix`][gimwatch.metrics.watch_sources.GivenMatrix] — the M (or diag M) the caller already
+* [`GivenMatrix`][gimwatch.watch.sources.GivenMatrix] — the M (or diag M) the caller already
   holds.
-* [`robot_from_model`][gimwatch.metrics.watch_sources.robot_from_model] — a ``pinocchio.Model``
+* [`robot_from_model`][gimwatch.watch.sources.robot_from_model] — a ``pinocchio.Model``
   wrapped as a gimwatch [`Robot`][gimwatch.model.robots.Robot] (M from Pinocchio's CRBA, diag M
   without M).
 
