@@ -23,22 +23,29 @@ test: setup
 	$(PY) -m pytest -n 2 --nbmake tests $(wildcard notebooks/*.ipynb)
 	$(MAKE) docs
 
-# The documentation site (docs/ -> site/), warnings as errors. Its python code blocks are
-# run by tests/test_docs.py.
+# The documentation site (docs/ -> site/), warnings as errors. Its python blocks, sh blocks and
+# console transcripts are run by tests/test_docs.py; its API pages are read by
+# tests/test_api_site.py.
 docs: setup
 	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
 
 # Regenerates benchmarks/survey/ and the table of docs/findings/survey.md
 .PHONY: survey
 survey: setup
-	$(VENV)/bin/gimwatch survey all --samples 200 --seed 0 --trajectory -o benchmarks/survey
+	$(VENV)/bin/gimwatch survey all --fixed --samples 200 --seed 0 --trajectory -o benchmarks/survey
 	$(PY) benchmarks/survey/update_readme.py
 
 # Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the measured block of
-# docs/findings/accuracy-costs.md.
+# docs/findings/accuracy-costs.md; each figure has one home (the cost sections in
+# benchmarks/cost/, the watch in a MuJoCo loop in benchmarks/watch_mujoco/, first contact in
+# benchmarks/startup/), so no figure exists twice.
 bench: setup
 	$(PY) -m pip install --quiet -c constraints.txt -e '.[test,notebooks,docs,pandas]'
-	$(VENV)/bin/gimwatch bench all -o benchmarks --page docs/findings/accuracy-costs.md
+	$(VENV)/bin/gimwatch bench conditioning estimators accuracy dynamics integrators longchain \
+		tighten -o benchmarks --page docs/findings/accuracy-costs.md
+	$(VENV)/bin/gimwatch bench lean tracker denoc watch -o benchmarks/cost
+	$(VENV)/bin/gimwatch bench watch_mujoco -o benchmarks/watch_mujoco
+	$(VENV)/bin/gimwatch bench startup -o benchmarks/startup
 
 # Planted bugs the tests must catch (tests/mutations.py): each applied in a temporary copy of
 # the tree, its test subset run; prints caught/missed/stale per mutant. On demand, not in test.

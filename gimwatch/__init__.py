@@ -2,7 +2,7 @@
 
 Importing gimwatch does no work: no robot is loaded, nothing is written, and no submodule is
 imported until one of its names is first used (PEP 562). ``gimwatch.load_robot`` imports
-``gimwatch.model.robots`` on first access; every name of :data:`__all__` is reachable this
+``gimwatch.model.robots`` on first access; every name of `__all__` is reachable this
 way, and ``from gimwatch import X`` works as usual.
 """
 
@@ -32,6 +32,11 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
         URDFError,
         URDFWarning,
     )
+    from gimwatch.explain.armature import ArmaturePlan, minimal_armature
+    from gimwatch.explain.maps import ConditioningMap, conditioning_map
+    from gimwatch.explain.modes import GimModes, gim_modes
+    from gimwatch.explain.sensitivity import KappaSensitivities, Sensitivity, kappa_sensitivities
+    from gimwatch.explain.trajectory import TrajectoryMetrics, trajectory_metrics
     from gimwatch.metrics.conditioning import (
         ScaledDiagonalRatio,
         check_gim,
@@ -51,25 +56,28 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
         gim_operator,
         kappa_matrix_free,
     )
-    from gimwatch.metrics.watch import Watch
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
         Robot,
+        default_floating,
         example_robot_names,
         load_robot,
         neutral_configuration,
         random_configurations,
     )
+    from gimwatch.simulation.bundled_scenes import bundled_scenes
     from gimwatch.simulation.results_folder import summarize, write_simulation
     from gimwatch.simulation.scene import Scene, load_scene, parse_scene
-    from gimwatch.simulation.simulate import Simulation, Trajectory, run_scene
+    from gimwatch.simulation.simulate import Simulation, run_scene
+    from gimwatch.simulation.trajectory import Trajectory
     from gimwatch.stress.reference_planar import PlanarChainReference, planar_reference
     from gimwatch.stress.reference_tree import TreeReference
     from gimwatch.stress.suite import StressResult, run_stress
     from gimwatch.survey.records import RobotFailure, RobotSurvey, SurveyResult
     from gimwatch.survey.report import write_survey
     from gimwatch.survey.run import run_survey
+    from gimwatch.watch.watch import Watch
 
 #: Public name -> the module that defines it (imported on first access).
 _EXPORTS: dict[str, str] = {
@@ -98,12 +106,13 @@ _EXPORTS: dict[str, str] = {
     "SimulationError": "gimwatch.errors",
     "StressResult": "gimwatch.stress.suite",
     "SurveyResult": "gimwatch.survey.records",
-    "Trajectory": "gimwatch.simulation.simulate",
+    "Trajectory": "gimwatch.simulation.trajectory",
     "TreeReference": "gimwatch.stress.reference_tree",
     "URDFError": "gimwatch.errors",
     "URDFWarning": "gimwatch.errors",
-    "Watch": "gimwatch.metrics.watch",
+    "Watch": "gimwatch.watch.watch",
     "analyze_configuration": "gimwatch.metrics.dense_analysis",
+    "bundled_scenes": "gimwatch.simulation.bundled_scenes",
     "chain_spec": "gimwatch.model.chains",
     "check_gim": "gimwatch.metrics.conditioning",
     "condition_estimate_1norm": "gimwatch.metrics.conditioning",
@@ -121,6 +130,7 @@ _EXPORTS: dict[str, str] = {
     "kappa_matrix_free": "gimwatch.metrics.matrix_free",
     "ldlt_pivots": "gimwatch.metrics.conditioning",
     "load_robot": "gimwatch.model.robots",
+    "default_floating": "gimwatch.model.robots",
     "load_scene": "gimwatch.simulation.scene",
     "neutral_configuration": "gimwatch.model.robots",
     "parse_scene": "gimwatch.simulation.scene",
@@ -136,20 +146,35 @@ _EXPORTS: dict[str, str] = {
     "write_chain_urdf": "gimwatch.model.chains",
     "write_simulation": "gimwatch.simulation.results_folder",
     "write_survey": "gimwatch.survey.report",
+    "ArmaturePlan": "gimwatch.explain.armature",
+    "ConditioningMap": "gimwatch.explain.maps",
+    "GimModes": "gimwatch.explain.modes",
+    "KappaSensitivities": "gimwatch.explain.sensitivity",
+    "Sensitivity": "gimwatch.explain.sensitivity",
+    "TrajectoryMetrics": "gimwatch.explain.trajectory",
+    "conditioning_map": "gimwatch.explain.maps",
+    "gim_modes": "gimwatch.explain.modes",
+    "kappa_sensitivities": "gimwatch.explain.sensitivity",
+    "minimal_armature": "gimwatch.explain.armature",
+    "trajectory_metrics": "gimwatch.explain.trajectory",
 }
 
 __all__ = [
+    "ArmaturePlan",
     "BackendWarning",
     "ChainSpec",
     "ConditioningError",
+    "ConditioningMap",
     "CrossCheckResult",
     "DenocModel",
     "ExampleRobotWarning",
     "GimAnalysis",
+    "GimModes",
     "GimwatchError",
     "GimwatchWarning",
     "IllConditionedWarning",
     "InputError",
+    "KappaSensitivities",
     "MatrixFreeKappa",
     "OutputError",
     "PlanarChainReference",
@@ -160,22 +185,27 @@ __all__ = [
     "ScaledDiagonalRatio",
     "Scene",
     "SceneError",
+    "Sensitivity",
     "Simulation",
     "SimulationError",
     "StressResult",
     "SurveyResult",
     "Trajectory",
+    "TrajectoryMetrics",
     "TreeReference",
     "URDFError",
     "URDFWarning",
     "Watch",
     "__version__",
     "analyze_configuration",
+    "bundled_scenes",
     "chain_spec",
     "check_gim",
     "condition_estimate_1norm",
     "condition_number",
+    "conditioning_map",
     "crosscheck_robot",
+    "default_floating",
     "diagonal_ratio",
     "eigenvalues",
     "estimator_quality",
@@ -184,11 +214,14 @@ __all__ = [
     "gim",
     "gim_diagonal",
     "gim_inverse_operator",
+    "gim_modes",
     "gim_operator",
     "kappa_matrix_free",
+    "kappa_sensitivities",
     "ldlt_pivots",
     "load_robot",
     "load_scene",
+    "minimal_armature",
     "neutral_configuration",
     "parse_scene",
     "pivot_ratio_backward",
@@ -199,6 +232,7 @@ __all__ = [
     "run_stress",
     "run_survey",
     "summarize",
+    "trajectory_metrics",
     "udut_pivots",
     "write_chain_urdf",
     "write_simulation",

@@ -1,8 +1,8 @@
 """Cross-check of the DeNOC implementation against Pinocchio, robot by robot.
 
 At K seeded random states (q within the joint limits from
-:func:`~gimwatch.model.robots.random_configurations`; v, a, τ standard normal from a NumPy
-generator with the same seed) it compares
+[`random_configurations`][gimwatch.model.robots.random_configurations]; v, a, τ standard normal from
+a NumPy generator with the same seed) it compares
 
 * the GIM with ``pinocchio.crba`` (and its O(n) diagonal),
 * τ with ``pinocchio.rnea``,
@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
+from gimwatch.denoc.tree import FREE_FLYER_NAME
 from gimwatch.errors import InputError, URDFError
 from gimwatch.metrics.conditioning import extreme_ratio, warn_if_ill_conditioned
 from gimwatch.model.robots import (
@@ -75,6 +76,9 @@ class CrossCheckResult:
             coordinates) against ``crba``; None without ``peer="mujoco"``.
         placeholder_limits: Joints whose placeholder limits were replaced by ±π rad / ±1 m.
         mujoco_refusal: Why MuJoCo refused the robot (the link and its reason), or "".
+        status: ``"passed"``, ``"failed"``, or ``"not compared"`` when there was nothing to
+            compare (M ≡ 0: no moving mass) — never counted as a pass; the reason is in
+            ``note``.
     """
 
     robot: str
@@ -94,6 +98,11 @@ class CrossCheckResult:
     mujoco_gim_rel_err: float | None = None
     placeholder_limits: tuple[str, ...] = ()
     mujoco_refusal: str = ""
+    status: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.status:
+            object.__setattr__(self, "status", "passed" if self.passed else "failed")
 
     def to_dict(self) -> dict:
         """The record as a plain dict (for JSON)."""
@@ -102,8 +111,13 @@ class CrossCheckResult:
 
 def denoc_model(robot: Robot) -> DenocModel:
     """The DeNOC model of a gimwatch robot, its coordinates in Pinocchio's order."""
+    # An MJCF file may float its root itself (a free joint named as in the file).
+    floating = "FreeFlyer" in robot.model.joints[1].shortname()
+    order = list(robot.joint_names)
+    if floating:
+        order[0] = FREE_FLYER_NAME
     return DenocModel.from_urdf(
-        robot.urdf_xml, floating=robot.floating, source=robot.source, joint_order=robot.joint_names
+        robot.urdf_xml, floating=floating, source=robot.source, joint_order=order
     )
 
 
@@ -175,8 +189,9 @@ def crosscheck_robot(
 
     M(q) is called singular only when it is numerically rank-deficient:
     λ_min(M) <= nv·ε·λ_max(M). Otherwise q̈ is compared within max(tolerance, κ·ε).
-    DeNOC reads URDF only: for an MJCF robot the reference is MuJoCo (``peer`` is forced
-    to ``"mujoco"``) and the DeNOC errors are None.
+    A robot without DeNOC input (an MJCF model with a ball joint or several floating trees,
+    see `gimwatch.model.mjcf_robot.urdf_of_model`) is compared with MuJoCo only
+    (``peer`` is forced to ``"mujoco"``) and its DeNOC errors are None.
 
     Args:
         robot: The robot (fixed or floating base, as loaded).
@@ -191,9 +206,14 @@ def crosscheck_robot(
         MujocoRefusal: MuJoCo refuses an inertia of the robot (the link is named).
     """
     tolerance = check_tolerance(tolerance)
-    model, data = robot.model, robot.new_data()
+    full_model, full_data = robot.model, robot.new_data()
+    model, data = full_model, full_data
+    if np.any(np.asarray(full_model.armature)):  # DeNOC's input has no armature: rigid bodies
+        model = full_model.copy()
+        model.armature = np.zeros(model.nv)
+        data = model.createData()
     use_denoc = bool(robot.urdf_xml)
-    peer = "mujoco" if not use_denoc else peer
+    peer = "mujoco" if not use_denoc or (robot.mujoco_joints and peer is None) else peer
     dm = denoc_model(robot) if use_denoc else None
     mj_model, refusal = None, ""
     if peer == "mujoco":
@@ -207,11 +227,12 @@ def crosscheck_robot(
             refusal = exc.problem
     rng = np.random.default_rng(seed)
     errors = dict.fromkeys(("gim", "diag", "tau", "qdd", "backward", "pivots", "mujoco"), 0.0)
-    kappa_max, conditioned_ok, singular_note = 0.0, True, ""
+    kappa_max, conditioned_ok, singular_note, largest_entry = 0.0, True, "", 0.0
     for q in random_configurations(robot, samples, seed=seed):
         v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
         upper = np.triu(pin.crba(model, data, q))
         M_ref = _finite(robot, "mass matrix M(q)", upper + np.triu(upper, 1).T)
+        largest_entry = max(largest_entry, float(np.abs(M_ref).max(initial=0.0)))
         eigenvalues = np.linalg.eigvalsh(M_ref)
         rank_deficient = eigenvalues[0] <= robot.nv * _EPS * eigenvalues[-1]
         kappa = np.inf if rank_deficient else extreme_ratio(eigenvalues)
@@ -220,7 +241,11 @@ def crosscheck_robot(
             from gimwatch.model.mujoco_model import pinocchio_mass_matrix
 
             M_mj = pinocchio_mass_matrix(robot, mj_model, q)
-            errors["mujoco"] = _worst(errors["mujoco"], _relative(M_mj, M_ref))
+            M_full = M_ref
+            if model is not full_model:
+                upper = np.triu(pin.crba(full_model, full_data, q))
+                M_full = upper + np.triu(upper, 1).T
+            errors["mujoco"] = _worst(errors["mujoco"], _relative(M_mj, M_full))
         if rank_deficient and not singular_note:
             singular_note = (
                 f"M(q) is singular at a sample (λmin = {eigenvalues[0]:.3g} <= nv·ε·λmax = "
@@ -255,8 +280,18 @@ def crosscheck_robot(
         )
         errors["backward"] = _worst(errors["backward"], float(backward))
     notes = []
+    vacuous = largest_entry == 0.0
+    if vacuous:  # every error is 0 / 1 = 0: nothing was compared, nothing passed
+        notes.append(
+            f"not compared: M(q) ≡ 0 at all {samples} samples (no link beyond a moving joint "
+            "has mass: give the links <inertial> elements)"
+        )
     if not use_denoc:
-        notes.append("DeNOC reads URDF only: Pinocchio's M is compared with MuJoCo's")
+        notes.append(
+            "DeNOC reads hinges and slides on one tree with at most one free joint at its "
+            "root (this model has a ball joint or several floating trees): Pinocchio's M is "
+            "compared with MuJoCo's"
+        )
         for key in ("gim", "diag", "tau", "qdd", "backward", "pivots"):
             errors[key] = None
     elif singular_note:
@@ -272,7 +307,7 @@ def crosscheck_robot(
         notes.append(placeholder_note(placeholders))
     if mj_model is None:
         errors["mujoco"] = None
-    if not singular_note:  # a singular M has its own label in the note
+    if not singular_note and not vacuous:  # a singular M has its own label in the note
         warn_if_ill_conditioned(kappa_max, where=f"{robot.name} (largest over {samples} samples)")
     compared = [errors[k] for k in ("gim", "diag", "tau", "backward", "mujoco")]
     passed = conditioned_ok and all(e <= tolerance for e in compared if e is not None)
@@ -281,7 +316,7 @@ def crosscheck_robot(
     )
     return CrossCheckResult(
         robot=robot.name,
-        floating=robot.floating,
+        floating=robot.floating or "FreeFlyer" in model.joints[1].shortname(),
         nv=robot.nv,
         samples=samples,
         gim_rel_err=errors["gim"],
@@ -292,9 +327,10 @@ def crosscheck_robot(
         pivots_rel_err=errors["pivots"],
         kappa_max=kappa_max,
         tolerance=tolerance,
-        passed=bool(passed),
+        passed=bool(passed) and not vacuous,
         note="; ".join(notes),
         mujoco_gim_rel_err=errors["mujoco"],
         placeholder_limits=placeholders,
         mujoco_refusal=refusal,
+        status="not compared" if vacuous else "",
     )

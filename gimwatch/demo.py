@@ -4,7 +4,7 @@ Shah & Saha (2013), Sec. 4: chains of identical slender rods (2.2 kg, 1 m), join
 z, released straight and horizontal at rest under gravity in the plane of motion. Each
 chain is simulated with DOP853 (rtol = atol = 1e-10) while the watch records κ₂, δ, αδ
 (α from t = 0 only, Eq. 15), both pivot ratios, the spectrum and diag M at every sample.
-:func:`run_demo` writes one results folder per chain, the figures in the spirit of the
+`run_demo` writes one results folder per chain, the figures in the spirit of the
 paper's Figs. 2–5 and ``report.md`` with the numbers.
 """
 
@@ -37,7 +37,7 @@ DEMO_METRICS = (
 
 
 def paper_chain_table(n: int, *, duration_s: float = 5.0, sample_s: float = 0.01) -> dict:
-    """The scene table of the paper's swinging n-link chain (``scenes/chain_N.toml``)."""
+    """The scene table of the paper's swinging n-link chain (``gimwatch/scenes/chain_N.toml``)."""
     return {
         "robot": f"chain:{n}",
         "duration": duration_s,
@@ -79,7 +79,7 @@ def _figures(runs: dict[int, Trajectory], output: Path, animate: int | None) -> 
     fig, axes = subplots(2, 2, (11, 7.5))
     t, eig = series(first, "eigenvalues")
     plots.plot_eigenvalues(t, eig, ax=axes[0, 0])
-    plots.plot_diagonal(t, series(first, "diagonal")[1], ax=axes[0, 1])
+    plots.plot_diagonal(t, series(first, "diagonal")[1], names=runs[first].dof_names, ax=axes[0, 1])
     axes[0, 1].set_ylabel("diagonal element M_ii [kg·m²]")  # the rod chains are all revolute
     axes[1, 0].semilogy(t, series(first, "kappa")[1])
     axes[1, 0].set(xlabel="time [s]", ylabel="κ₂ = λmax/λmin [-]", title="Condition number")
@@ -273,7 +273,7 @@ def run_demo(
 ) -> Path:
     """Simulate the paper's chains, write figures, results and ``report.md``; return its path.
 
-    The results folder is replaced whole (:mod:`gimwatch.output.folders`). A chain whose run
+    The results folder is replaced whole (`gimwatch.output.folders`). A chain whose run
     ends early (Ctrl-C: status ``interrupted``) is written as far as it went, the later
     chains are not run, and the report says so.
 

@@ -1,10 +1,10 @@
 """The exception tree of gimwatch and its warnings.
 
-Every error gimwatch raises on bad input derives from :class:`GimwatchError`; the
-subclasses keep the offending value as attributes and build a one-line message from
-them (what was wrong, what was received, and the fix when it is obvious). The command
-line prints that line and exits with status 2. Every warning derives from
-:class:`GimwatchWarning`.
+Every error gimwatch raises on bad input derives from
+[`GimwatchError`][gimwatch.errors.GimwatchError]; the subclasses keep the offending value as
+attributes and build a one-line message from them (what was wrong, what was received, and the fix
+when it is obvious). The command line prints that line and exits with status 2. Every warning
+derives from [`GimwatchWarning`][gimwatch.errors.GimwatchWarning].
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Suggestions for mistyped names (commands, metrics, robots): "did you mean ...?".
 
 One helper so that every "unknown name" message reads the same way. Matching is
-:func:`difflib.get_close_matches` with a cutoff that catches transpositions and one or two
+`difflib.get_close_matches` with a cutoff that catches transpositions and one or two
 wrong letters (``kapa`` → ``kappa``, ``analyse`` → ``analyze``) but not unrelated words.
 """
 

@@ -23,15 +23,18 @@ LAYERS = {
     "_version": 1,
     "suggest": 1,
     "output": 1,
+    "jit": 1,
     "model": 2,
     "denoc": 3,
     "crosscheck": 4,
     "metrics": 4,
+    "watch": 4,
     "simulation": 5,
     "stress": 6,
     "survey": 6,
     "bench": 6,
     "demo": 6,
+    "explain": 6,
     "cli": 7,
     "__main__": 7,
     "__init__": 7,
@@ -190,3 +193,92 @@ def test_errors_are_exported():
     from gimwatch import errors
 
     assert set(errors.__all__) <= set(gimwatch.__all__)
+
+
+def _module_name(path: Path) -> str:
+    name = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+    return name.removesuffix(".__init__")
+
+
+def import_graph(root: Path = ROOT) -> dict[str, set[str]]:
+    """Module -> the gimwatch modules it imports, anywhere in it (functions and
+    ``TYPE_CHECKING`` blocks included: a type-only circle is still a circle to read)."""
+    paths = {
+        _module_name(p): p
+        for p in sorted((root / "gimwatch").rglob("*.py"))
+        if "__pycache__" not in p.parts
+    }
+
+    def resolve(module: str) -> str:
+        while module and module not in paths:
+            module = module.rpartition(".")[0]
+        return module
+
+    graph = {}
+    for name, path in paths.items():
+        targets = set()
+        for _, module, names in _gimwatch_imports(path):
+            for imported in names or [""]:
+                full = f"{module}.{imported}" if imported else module
+                targets.add(full if full in paths else resolve(module))
+        targets.discard(name)
+        graph[name] = targets
+    return graph
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    cycles = []
+    for start in graph:
+        if start in index:
+            continue
+        work = [(start, iter(sorted(graph[start])))]
+        index[start] = low[start] = len(index)
+        stack.append(start)
+        on_stack.add(start)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in graph:
+                    continue
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    cycles.append(sorted(component))
+    return cycles
+
+
+def test_no_import_cycles():
+    cycles = import_cycles(import_graph())
+    assert not cycles, "modules that import each other (directly or around a circle):\n" + (
+        "\n".join("  " + " <-> ".join(c) for c in cycles)
+    )
+
+
+def test_the_cycle_check_finds_a_planted_cycle():
+    graph = import_graph()
+    graph["gimwatch.errors"] = graph["gimwatch.errors"] | {"gimwatch.model.robots"}
+    cycles = import_cycles(graph)
+    assert any({"gimwatch.errors", "gimwatch.model.robots"} <= set(c) for c in cycles)

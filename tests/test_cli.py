@@ -85,7 +85,7 @@ def test_analyze_csv_has_the_json_numbers(capsys):
 @pytest.mark.parametrize("floating", [False, True], ids=["fixed", "floating"])
 @pytest.mark.parametrize("name", EXAMPLE_ROBOTS)
 def test_analyze_every_example_robot(capsys, name, floating):
-    argv = ["analyze", name, "--json"] + (["--floating"] if floating else [])
+    argv = ["analyze", name, "--json", "--floating" if floating else "--fixed"]
     code, out, err = run(capsys, *argv)
     if name in NO_DOF_WHEN_FIXED and not floating:
         assert code == 2 and err.count("\n") == 1 and "no degree of freedom" in err
@@ -152,7 +152,7 @@ def test_crosscheck_all_skips_what_cannot_load_with_the_reason(capsys, monkeypat
     import gimwatch.cli.crosscheck as command
 
     monkeypatch.setattr(command, "example_robot_names", lambda: ("cassie", "iris", "romeo"))
-    code, out, err = run(capsys, "crosscheck", "all", "--samples", "1")
+    code, out, err = run(capsys, "crosscheck", "all", "--samples", "1", "--fixed")
     assert code == 0
     assert "crosscheck: skipped cassie: example-robot-data ships it only as SDF" in err
     assert "crosscheck: skipped iris: has no degree of freedom with a fixed base" in err

@@ -17,8 +17,8 @@ def run(capsys, *argv):
 def test_survey_writes_report_json_csv_and_plots(capsys, tmp_path):
     argv = ["survey", "chain:4", "ur5", "cassie", "--samples", "6", "--workers", "1"]
     code, out, err = run(capsys, *argv, "-o", str(tmp_path))
-    assert code == 0, err
-    assert "not surveyed: cassie: robot 'cassie'" in out and "chain_4" in out
+    assert code == 2, err  # a robot named on the command line was refused: reported, status 2
+    assert "refused: cassie: robot 'cassie'" in out and "chain_4" in out
     names = {p.name for p in tmp_path.iterdir()}
     assert {"report.md", "survey.json", "survey.csv", "table.md"} <= names
     for png in ("kappa_vs_delta.png", "kappa_vs_delta_per_robot.png"):

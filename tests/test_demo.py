@@ -7,7 +7,7 @@ from closed_forms import rod_chain_gim
 
 from gimwatch.demo import PAPER_CHAIN_LENGTHS, paper_chain_table, run_demo
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "gimwatch" / "scenes"
 
 
 @pytest.mark.parametrize("n", PAPER_CHAIN_LENGTHS)

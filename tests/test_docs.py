@@ -1,19 +1,28 @@
-"""Every ```python block in README.md and docs/**/*.md runs, from an empty folder.
+"""Every ```python and ```sh block in README.md and docs/**/*.md runs, from an empty folder.
 
-The blocks of one page run in order in one namespace (a page reads as one session). A block
-may be kept from running only with a stated reason, on the line just above its fence::
+The python blocks of one page run in order in one namespace (a page reads as one session).
+Every line of an ``sh`` block is a command run in a fresh empty folder with the installed
+``gimwatch`` (exit 0 expected); a ``text`` block whose lines start with ``$ `` is a console
+transcript: its commands are run and their output must be the one shown. A block may be kept
+from running only with a stated reason, on the line just above its fence, and the reason is
+reported as the skip reason (``pytest -ra``)::
 
     <!-- no-run: needs a MuJoCo licence server -->
 
-Other fences (``sh``, ``text``, ``toml``) are shown, not run. The pages are found by walking
-``docs/`` without following its links to ``benchmarks/`` (reports, not pages) and
-``notebooks/`` (run by ``pytest --nbmake``), plus the notebooks' README, which is a page.
+An ``sh`` block with a command other than ``gimwatch`` (``pip``, ``make``) must carry one.
+Command synopses (``gimwatch analyze ROBOT [--q Q...]``) are ``text`` blocks. Other fences
+(``toml``, plain ``text``) are shown, not run. The pages are found by walking ``docs/``
+without following its links to ``benchmarks/`` (reports, not pages) and ``notebooks/`` (run
+by ``pytest --nbmake``), plus the notebooks' README, which is a page.
 """
 
 from __future__ import annotations
 
 import os
 import re
+import shlex
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,6 +30,7 @@ import matplotlib
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+SHELL_FENCES = ("sh", "bash", "shell")
 FENCE = re.compile(r"^```(\S*)[^\n]*\n(.*?)^```\s*$", re.DOTALL | re.MULTILINE)
 NO_RUN = re.compile(r"<!--\s*no-run:\s*(.*?)\s*-->\s*$")
 
@@ -42,10 +52,14 @@ def doc_pages() -> list[Path]:
 
 
 def python_blocks(page: Path) -> list[Block]:
+    return fenced_blocks(page, ("python", "py"))
+
+
+def fenced_blocks(page: Path, languages: tuple[str, ...]) -> list[Block]:
     text = page.read_text(encoding="utf-8")
     blocks = []
     for match in FENCE.finditer(text):
-        if match.group(1) not in ("python", "py"):
+        if match.group(1) not in languages:
             continue
         before = text[: match.start()].rstrip("\n").rsplit("\n", 1)[-1]
         marker = NO_RUN.search(before)
@@ -114,11 +128,11 @@ def test_notebooks_are_stored_with_their_outputs(path):
 
 
 def test_stated_times_are_the_measured_ones():
-    """Times on the front pages come from benchmarks/startup.csv and newcomer/times.json."""
+    """Times on the front pages come from benchmarks/startup/ and newcomer/times.json."""
     import csv
     import json
 
-    with (ROOT / "benchmarks" / "startup.csv").open(newline="") as handle:
+    with (ROOT / "benchmarks" / "startup" / "startup.csv").open(newline="") as handle:
         startup = {row["case"]: float(row["median_s"]) for row in csv.DictReader(handle)}
     newcomer = json.loads((ROOT / "benchmarks" / "newcomer" / "times.json").read_text())
 
@@ -130,7 +144,7 @@ def test_stated_times_are_the_measured_ones():
     for text in (
         f"`import gimwatch` takes {startup['import gimwatch']:.2f} s against "
         f"{startup['import pinocchio']:.2f} s",
-        f"SciPy and numba: {startup['import gimwatch + first names']:.2f} s",
+        f"Pinocchio and SciPy: {startup['import gimwatch + first names']:.2f} s",
         f"`gimwatch analyze ur5` takes {startup['gimwatch analyze ur5']:.2f} s, {ratio:.2f}x",
         f"`gimwatch demo` takes {startup['gimwatch demo']:.1f} s",
     ):
@@ -143,8 +157,126 @@ def test_stated_times_are_the_measured_ones():
         f"`pip install .` {newcomer['pip_install_s']:.0f} s",
         f"`gimwatch analyze ur5` {newcomer['analyze_ur5_s']:.2f} s",
         f"the Python above {newcomer['readme_python_snippet_s']:.1f} s",
-        f"`gimwatch simulate scenes/chain_10.toml` {newcomer['simulate_chain_10_s']:.1f} s",
+        f"`gimwatch simulate chain_10` {newcomer['simulate_chain_10_s']:.1f} s",
         f"`gimwatch demo` {newcomer['demo_s']:.0f} s",
+        f"{newcomer['readme_watch_loop_first_run_s']:.1f} s for the block above, "
+        f"{newcomer['readme_watch_loop_second_run_s']:.1f} s on later runs",
     ):
         assert text in readme, text
+    assert (
+        f"{newcomer['readme_watch_loop_first_run_s']:.1f} s on its first run in a fresh install, "
+        f"{newcomer['readme_watch_loop_second_run_s']:.1f} s after" in started
+    )
     assert newcomer["install_analysis_and_simulation_s"] < 120  # "under 2 minutes"
+
+
+def shell_commands(code: str) -> list[str]:
+    """The commands of an ``sh`` block: one a line (``\\`` continues), ``# comments`` cut."""
+    joined = re.sub(r"\\\n", " ", code)
+    commands = []
+    for line in joined.splitlines():
+        words = shlex.split(line, comments=True)
+        if words:
+            commands.append(shlex.join(words))
+    return commands
+
+
+def console_steps(code: str) -> list[tuple[str, str]]:
+    """(command, expected output) pairs of a console transcript (``$ cmd`` then its output)."""
+    steps: list[tuple[str, list[str]]] = []
+    for line in code.splitlines():
+        if line.startswith("$ "):
+            steps.append((line[2:], []))
+        elif steps:
+            steps[-1][1].append(line)
+    return [(command, "\n".join(lines).strip("\n")) for command, lines in steps]
+
+
+def run_gimwatch(command: str, cwd: Path) -> subprocess.CompletedProcess:
+    """Run one documented ``gimwatch ...`` command as written, with this tree's gimwatch."""
+    words = shlex.split(command)
+    assert words[0] == "gimwatch", f"{command!r}: only gimwatch commands run here"
+    environment = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
+    return subprocess.run(
+        [sys.executable, "-m", "gimwatch", *words[1:]],
+        cwd=cwd,
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+
+
+SHELL_BLOCKS = [b for page in doc_pages() for b in fenced_blocks(page, SHELL_FENCES)]
+CONSOLE_BLOCKS = [
+    b
+    for page in doc_pages()
+    for b in fenced_blocks(page, ("text", "console"))
+    if b.code.startswith("$ ")
+]
+
+
+def _block_id(block: Block) -> str:
+    return f"{block.page.relative_to(ROOT).as_posix()}:{block.line}"
+
+
+def test_shell_parsers():
+    assert shell_commands("gimwatch a x  # note\n\n# alone\ngimwatch b \\\n  --json\n") == [
+        "gimwatch a x",
+        "gimwatch b --json",
+    ]
+    assert console_steps("$ gimwatch a\nline 1\nline 2\n$ gimwatch b\n") == [
+        ("gimwatch a", "line 1\nline 2"),
+        ("gimwatch b", ""),
+    ]
+    assert len(SHELL_BLOCKS) >= 5 and len(CONSOLE_BLOCKS) >= 3
+
+
+@pytest.mark.parametrize("block", SHELL_BLOCKS, ids=_block_id)
+def test_shell_blocks_run(block, tmp_path):
+    commands = shell_commands(block.code)
+    assert commands, f"{_block_id(block)}: an empty sh block"
+    if block.skip_reason is not None:
+        assert block.skip_reason.strip(), f"{_block_id(block)}: no-run needs a reason"
+        pytest.skip(f"{_block_id(block)}: {block.skip_reason}")
+    for command in commands:
+        assert command.startswith("gimwatch "), (
+            f"{_block_id(block)}: {command!r} is not a gimwatch command; mark the block "
+            "<!-- no-run: reason --> or make it a text block"
+        )
+        done = run_gimwatch(command, tmp_path)
+        assert done.returncode == 0, f"{_block_id(block)}: {command}: {done.stderr[-2000:]}"
+
+
+@pytest.mark.parametrize("block", CONSOLE_BLOCKS, ids=_block_id)
+def test_console_transcripts_match(block, tmp_path):
+    if block.skip_reason is not None:
+        assert block.skip_reason.strip(), f"{_block_id(block)}: no-run needs a reason"
+        pytest.skip(f"{_block_id(block)}: {block.skip_reason}")
+    for command, expected in console_steps(block.code):
+        done = run_gimwatch(command, tmp_path)
+        shown = (done.stdout + done.stderr).strip("\n")
+        assert shown == expected, f"{_block_id(block)}: {command}"
+
+
+@pytest.mark.parametrize(
+    ("measured", "command"),
+    [
+        ("benchmarks/startup/summary.json", "gimwatch bench startup -o benchmarks/startup"),
+        ("benchmarks/newcomer/times.json", "bash benchmarks/newcomer/measure.sh"),
+    ],
+)
+def test_measured_times_are_not_older_than_the_code_they_time(measured, command):
+    """A timing file records the modules its commands imported (gimwatch.bench.freshness)."""
+    import json
+
+    from gimwatch.bench.freshness import FINGERPRINT_KEY, stale_modules
+
+    record = json.loads((ROOT / measured).read_text())
+    if "sections" in record:
+        record = record["sections"]["startup"]
+    fingerprint = record[FINGERPRINT_KEY]
+    assert {"gimwatch/cli/analyze.py", "gimwatch/model/robots.py"} <= set(fingerprint["modules"])
+    stale = stale_modules(fingerprint, ROOT)
+    assert not stale, f"{measured} predates changes to {stale}: regenerate it with `{command}`"

@@ -163,7 +163,7 @@ def test_simulation_figures_are_the_ones_the_tests_check():
 
 
 def test_watch_cost_figures_are_the_committed_ones():
-    rows = {r["watch"]: r for r in _csv("watch.csv") if r["n"] == "20"}
+    rows = {r["watch"]: r for r in _csv("cost/watch.csv") if r["n"] == "20"}
     match = _find(
         "docs/guide/simulate.md",
         r"δ costs about (\d+) µs per sample, ([\d.]+) % of a bare step amortized \(κ: ([\d.]+) %",
@@ -725,7 +725,7 @@ def test_survey_prose_is_the_committed_survey():
     chunk = inspect.signature(run_survey).parameters["chunk_size"].default
     assert int(_find(page, r"cut into chunks of (\d+)\)").group(1)) == chunk
     assert (
-        int(_find(page, r"survey all --samples (\d+) --trajectory").group(1))
+        int(_find(page, r"survey all --fixed --samples (\d+) --trajectory").group(1))
         == (survey["samples_per_robot"])
     )
 
@@ -851,7 +851,7 @@ def test_crosscheck_prose_is_the_committed_runs():
     assert forward == float(f"{max(r['qdd_rel_err'] for r in icub):.0e}")
     assert max(r["qdd_backward_err"] for r in icub) < backward
     assert max(r["qdd_backward_err"] for r in icub) > backward / 100
-    rows = {(int(r["n"]), r["quantity"]): float(r["ratio"]) for r in _csv("denoc.csv")}
+    rows = {(int(r["n"]), r["quantity"]): float(r["ratio"]) for r in _csv("cost/denoc.csv")}
     match = _find(
         page,
         r"forward dynamics costs (\d+)× Pinocchio's ABA at n = 10 \(call overhead\),\s+"
@@ -880,7 +880,7 @@ def test_simulate_prose_is_the_demo_and_bench_settings():
     over = _find(page, r"overestimates κ by up to ~(\d+)× for the 4-link chain")
     assert int(over.group(1)) == round(1 + test_simulate.PUBLISHED_DEMO[4]["max"])
     watch = _find(page, r"RK4, a sample every\s+(\d+) steps, (\d+) links\)")
-    sizes = {int(r["n"]) for r in _csv("watch.csv")}
+    sizes = {int(r["n"]) for r in _csv("cost/watch.csv")}
     assert _numbers(watch) == [STEPS_PER_SAMPLE, max(sizes)]
 
 
@@ -994,7 +994,7 @@ def test_bench_block_tables_are_the_committed_csv_files():
             source["note"],
         ]
 
-    watch = {r["watch"]: r for r in _csv("watch.csv") if r["n"] == "20"}
+    watch = {(r["n"], r["watch"]): r for r in _csv("cost/watch.csv")}
     columns = {
         "step (µs)": "step_us",
         "run overhead": "run_overhead",
@@ -1004,12 +1004,13 @@ def test_bench_block_tables_are_the_committed_csv_files():
         "sample / aba call": "sample_vs_aba_call",
     }
     table = _block_table("Cost of the watch per step")
-    assert [row["watch"] for row in table] == list(watch)
+    assert [(row["n"], row["watch"]) for row in table] == list(watch)
     for row in table:
         for header, key in columns.items():
-            assert row[header] == _g3(watch[row["watch"]][key]), (row["watch"], header)
+            source = watch[(row["n"], row["watch"])]
+            assert row[header] == _g3(source[key]), (row["n"], row["watch"], header)
 
-    denoc = {(r["n"], r["quantity"]): r for r in _csv("denoc.csv")}
+    denoc = {(r["n"], r["quantity"]): r for r in _csv("cost/denoc.csv")}
     table = _block_table("DeNOC vs Pinocchio cost")
     assert len(table) == len(denoc)
     for row in table:
@@ -1053,7 +1054,7 @@ def test_bench_block_sentences_are_the_committed_summary():
             "ratio_measured",
         )
     ]
-    watch = summary["watch"]
+    watch = json.loads((BENCH / "cost" / "summary.json").read_text())["sections"]["watch"]
     match = _find(page, r"= ([\d.]+)% of a bare RK4 \+ ABA step \(([\d.]+) µs\)")
     assert float(match.group(1)) == round(100 * watch["delta_sample_vs_step"], 1)
     match = _find(page, r"watching δ costs under (\d+)% of a bare ABA step")
@@ -1146,7 +1147,7 @@ def test_figures_about_what_the_tests_run_are_the_tests():
 
 
 def test_startup_and_chain_1000_settings_are_the_committed_runs():
-    repeats = {r["case"]: int(r["repeats"]) for r in _csv("startup.csv")}
+    repeats = {r["case"]: int(r["repeats"]) for r in _csv("startup/startup.csv")}
     page = "docs/getting-started.md"
     match = _find(page, r"\(`gimwatch bench startup`, medians of (\d+) runs,")
     quoted = ("import gimwatch", "import pinocchio", "gimwatch analyze ur5")
@@ -1156,7 +1157,7 @@ def test_startup_and_chain_1000_settings_are_the_committed_runs():
     summary = json.loads((BENCH / "chain_1000" / "summary.json").read_text())
     match = _find(
         "docs/findings/long-chains.md",
-        r"`scenes/chain_1000.toml` \(DOP853, rtol = atol = ([\d.e-]+), δ watched\) simulates "
+        r"`gimwatch simulate chain_1000` \(DOP853, rtol = atol = ([\d.e-]+), δ watched\) simulates "
         r"(\d+) s",
     )
     integrator = summary["integrator"]
@@ -1213,15 +1214,55 @@ def test_bench_block_work_precision_table_is_the_committed_csv():
     assert walls["mujoco RK4"] == _g3(acceptance["mujoco_rk4_interpolated_s"])
 
 
-def test_watch_page_quotes_the_committed_mujoco_loop_run():
-    with (BENCH / "watch_mujoco" / "watch_mujoco.csv").open(newline="") as handle:
-        rows = [r for r in csv.DictReader(handle) if r["source"] == "data"]
-    match = _find(
+def test_watch_page_quotes_the_committed_watch_overhead_run():
+    rows = _csv("watch_overhead/watch_overhead.csv")
+
+    def ratio(robot, loop, metric, column="watch_vs_bare"):
+        (row,) = [r for r in rows if (r["robot"], r["loop"], r["metric"]) == (robot, loop, metric)]
+        return f"{float(row[column]):.2f}"
+
+    _find(
         "docs/watch.md",
-        r"one sample costs\s+([\d.]+)–([\d.]+) `mj_step`s watching δ and (\d+)–(\d+) watching κ",
+        rf"a κ sample costs {ratio('xarm7', 'mujoco', 'kappa')}× `mj_fullM` \+ `eigvalsh` "
+        rf"and a δ sample {ratio('xarm7', 'mujoco', 'delta')}× reading",
     )
-    delta = [float(r["sample_vs_step"]) for r in rows if r["watch"] == "delta"]
-    kappa = [float(r["sample_vs_step"]) for r in rows if r["watch"] == "kappa"]
-    low, high, k_low, k_high = (float(x) for x in match.groups())
-    assert (low, high) == (round(min(delta), 2), round(max(delta), 1))
-    assert (k_low, k_high) == (int(min(kappa)), int(max(kappa)))
+    _find(
+        "docs/watch.md",
+        rf"{ratio('xarm7', 'pinocchio', 'kappa')}× `pin.crba` \+ `eigvalsh` and "
+        rf"{ratio('xarm7', 'pinocchio', 'delta')}× the O\(n\) diagonal",
+    )
+    _find("docs/watch.md", rf"{ratio('g1', 'mujoco', 'kappa', 'watch_vs_step')} `mj_step`s")
+    tracker = {
+        int(r["n"]): float(r["tracked_vs_dense"]) for r in _csv("watch_overhead/watch_tracker.csv")
+    }
+    pays = min(n for n, ratio in tracker.items() if ratio < 1.0)
+    below = max(n for n in tracker if n < pays)
+    _find(
+        "docs/watch.md",
+        rf"pays from about n = {pays}: .* costs {tracker[below]:.2f}× the dense κ sample at "
+        rf"n = {below}, {tracker[pays]:.2f}× at n = {pays} and {tracker[max(tracker)]:.2f}× at "
+        rf"n = {max(tracker)}",
+    )
+
+
+def test_explain_page_quotes_the_committed_map_timings():
+    rows = _csv("explain/explain.csv")
+    arm = next(r for r in rows if r["path"] == "crba" and r["workers"] == "1")
+    pooled = next(r for r in rows if r["path"] == "crba" and r["workers"] == "2")
+    chain = next(r for r in rows if r["path"] == "denoc")
+    match = _find(
+        "docs/guide/explain.md",
+        r"nv = 9\) took ([\d.]+) s in one process \((\d+) µs per point\);\s+on 2 worker "
+        r"processes it took ([\d.]+) s",
+    )
+    assert match.groups() == (
+        f"{float(arm['seconds']):.2f}",
+        f"{float(arm['us_per_point']):.0f}",
+        f"{float(pooled['seconds']):.1f}",
+    )
+    match = _find("docs/guide/explain.md", r"O\(n\) path took (\d+) s on 2 workers \(([\d.]+) ms")
+    assert match.groups() == (
+        f"{float(chain['seconds']):.0f}",
+        f"{float(chain['us_per_point']) / 1000:.1f}",
+    )
+    assert (arm["grid"], chain["grid"], chain["nv"]) == ("200", "100", "1000")

@@ -17,7 +17,12 @@ import pinocchio as pin
 import pytest
 
 from gimwatch.errors import ExampleRobotWarning, GimwatchError
-from gimwatch.model.robots import EXAMPLE_ROBOT_NOTES, example_robot_names, load_robot
+from gimwatch.model.robots import (
+    EXAMPLE_ROBOT_NOTES,
+    default_floating,
+    example_robot_names,
+    load_robot,
+)
 
 example_robot_data = pytest.importorskip("example_robot_data")
 
@@ -31,15 +36,14 @@ def _loader_model(name: str) -> pin.Model | None:
 
 
 def _agrees(name: str) -> bool:
-    """Whether gimwatch's model of ``name`` has the loader's M(q0), with the loader's base."""
+    """Whether gimwatch's model of ``name`` has the loader's M(q0): its default base included."""
     reference = _loader_model(name)
     if reference is None:
         return True  # nothing to compare with; gimwatch refuses SDF-only robots itself
-    floating = reference.njoints > 1 and reference.joints[1].shortname() == "JointModelFreeFlyer"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         try:
-            robot = load_robot(name, floating=floating)
+            robot = load_robot(name)  # no base asked: it must be the loader's
         except GimwatchError:
             return True  # refusals are tested with the bad-input corpus
     if robot.nv != reference.nv or robot.nq != reference.nq:
@@ -77,3 +81,47 @@ def test_talos_arm_differs_by_the_loaders_armature_only():
     expected = pin.crba(reference, reference.createData(), pin.neutral(reference))
     got = pin.crba(robot.model, robot.model.createData(), pin.neutral(robot.model))
     np.testing.assert_allclose(got + np.diag(reference.armature), expected, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("name", ["anymal", "solo12", "iris", "ur5", "panda"])
+def test_the_default_base_is_the_loaders(name):
+    reference = _loader_model(name)
+    free_flyer = reference.joints[1].shortname() == "JointModelFreeFlyer"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = load_robot(name)
+        fixed = load_robot(name, floating=False) if free_flyer and name != "iris" else robot
+    assert (robot.floating, robot.nq, robot.nv) == (free_flyer, reference.nq, reference.nv)
+    assert default_floating(name) is free_flyer
+    if free_flyer and name != "iris":  # a drone has no joint on a fixed base
+        assert (fixed.floating, fixed.nv) == (False, reference.nv - 6)
+
+
+def test_commands_agree_on_the_default_base(capsys):
+    from gimwatch.cli import main
+    from gimwatch.cli.robots import robot_rows
+
+    rows = {r["name"]: r for r in robot_rows()}
+    assert (rows["anymal"]["base"], rows["anymal"]["nv"]) == ("floating", 18)
+    assert (rows["ur5"]["base"], rows["ur5"]["nv"]) == ("fixed", 6)
+    capsys.readouterr()
+    assert main(["analyze", "anymal", "--json"]) == 0
+    assert '"base": "floating"' in capsys.readouterr().out
+    assert main(["analyze", "anymal", "--fixed"]) == 0
+    assert capsys.readouterr().out.startswith("anymal: nv = 12, fixed base")
+    assert main(["analyze", "ur5", "--floating"]) == 0
+    assert capsys.readouterr().out.startswith("ur5: nv = 12, floating base")
+    assert load_robot("chain:3").floating is False  # chains and files: fixed
+
+
+def test_a_scene_without_base_gets_the_robots_default():
+    from gimwatch.simulation.scene import parse_scene
+    from gimwatch.simulation.scene_robot import load_scene_robot
+
+    def base(**extra):
+        table = {"robot": "solo12", "duration": 0.1, "sample": 0.05, **extra}
+        return load_scene_robot(parse_scene(table)).floating
+
+    assert base() is True and base(base="fixed") is False and base(base="floating") is True
+    chain = parse_scene({"robot": "chain:3", "duration": 0.1, "sample": 0.05})
+    assert load_scene_robot(chain).floating is False

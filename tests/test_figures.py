@@ -55,6 +55,9 @@ FIGURE_CALLS = {
     "plot_joint_angles": lambda ax: figures.plot_joint_angles(
         T, POSITIVE, names=["a", "b", "c", "d"], units=["rad", "rad", "m", "-"], ax=ax
     ),
+    "plot_watch": lambda ax: figures.plot_watch(
+        T, {"kappa": POSITIVE[:, 0]}, alarm_metric="kappa", threshold=2.0, ax=ax
+    ),
 }
 
 
@@ -112,6 +115,10 @@ def test_joint_coordinate_units_from_a_model():
     assert (names, units) == (["hinge", "slider"], ["rad", "m"])
 
 
+#: Tables of the sections measured in benchmarks/cost/ (each figure has one home).
+COST_TABLES = ("watch.json", "denoc.json")
+
+
 def _rows(folder: str, table: str) -> list[dict]:
     rows = json.loads((ROOT / folder / table).read_text(encoding="utf-8"))["rows"]
     return [{k: float("nan") if v is None else v for k, v in row.items()} for row in rows]
@@ -120,7 +127,8 @@ def _rows(folder: str, table: str) -> list[dict]:
 @pytest.mark.parametrize("png", sorted(bench_plots.FIGURES))
 def test_bench_figures_label_units(png, tmp_path):
     table, _, keep = bench_plots.FIGURES[png]
-    rows = [r for r in _rows("benchmarks", table) if keep(r)]
+    folder = "benchmarks/cost" if table in COST_TABLES else "benchmarks"
+    rows = [r for r in _rows(folder, table) if keep(r)]
     name = {
         "conditioning_cost.png": "draw_cost_vs_n",
         "estimators_pareto.png": "draw_pareto",
@@ -143,13 +151,13 @@ def test_every_bench_draw_function_is_in_the_figure_table():
 
 
 def test_watch_cost_bars_are_on_a_linear_axis():
-    ax = bench_plots.draw_watch_cost(_rows("benchmarks", "watch.json"), ax=_axes())
+    ax = bench_plots.draw_watch_cost(_rows("benchmarks/cost", "watch.json"), ax=_axes())
     assert ax.get_yscale() == "linear"
 
 
 def test_replot_redraws_from_the_tables_alone(tmp_path):
     for table in ("watch.json", "denoc.json"):
-        (tmp_path / table).write_text((ROOT / "benchmarks" / table).read_text())
+        (tmp_path / table).write_text((ROOT / "benchmarks" / "cost" / table).read_text())
     written = bench_plots.replot(tmp_path)
     assert sorted(p.name for p in written) == ["denoc_cost.png", "watch_cost.png"]
     assert all(p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" for p in written)
@@ -197,3 +205,120 @@ def test_survey_grid_has_units_and_few_ticks():
                 if t.get_text() and low <= t.get_position()[0] <= high
             ]
             assert len(shown) <= 4, [t.get_text() for t in shown]
+
+
+def _visible_labels(ax, axis: str) -> list[str]:
+    low, high = sorted(getattr(ax, f"get_{axis}lim")())
+    ticks = getattr(ax, f"get_{axis}ticklabels")(minor=False) + getattr(
+        ax, f"get_{axis}ticklabels"
+    )(minor=True)
+    index = 0 if axis == "x" else 1
+    return [t.get_text() for t in ticks if t.get_text() and low <= t.get_position()[index] <= high]
+
+
+def _drawn(fig):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    return fig.canvas.get_renderer()
+
+
+def _inside(fig, artist) -> bool:
+    renderer = fig.canvas.get_renderer()
+    box, page = artist.get_window_extent(renderer), fig.bbox
+    return page.x0 - 1 <= box.x0 and box.x1 <= page.x1 + 1 and page.y0 - 1 <= box.y0
+    # (the top is checked by callers that need it)
+
+
+def test_one_outlier_does_not_stretch_the_survey_scatter():
+    survey = _survey(20)
+    survey.robots[3].metrics["kappa"][0] = 1e17  # one bad configuration of one robot
+    ax = survey_plots.plot_kappa_vs_delta(survey, ax=_axes())
+    assert ax.get_ylim()[1] < 1e4  # the 600 others span ~1e-1 .. 1e3
+    notes = [t.get_text() for t in ax.texts]
+    assert notes == ["1 point(s) beyond the axes; largest κ = 1e+17 (robot_3)"]
+    plain = survey_plots.plot_kappa_vs_delta(_survey(20), ax=_axes())
+    assert not plain.texts  # nothing left out when nothing is far out
+
+
+def test_a_small_survey_has_no_empty_legend_entry():
+    ax = survey_plots.plot_kappa_vs_delta(_survey(3), ax=_axes())
+    labels = [c.get_label() for c in ax.collections]
+    assert not [x for x in labels if "other" in x]
+    many = survey_plots.plot_kappa_vs_delta(_survey(12), ax=_axes())
+    assert "the other 4 robots" in [c.get_label() for c in many.collections]
+
+
+def test_every_grid_panel_has_tick_labels_and_no_label_is_clipped():
+    survey = _survey(3)
+    narrow = np.linspace(2.0, 3.0, 30)  # less than a decade on both axes
+    survey.robots[1].metrics = {"diagonal_ratio": narrow, "kappa": 2.5 * narrow}
+    fig = Figure(figsize=survey_plots.grid_figsize(3))
+    survey_plots.plot_kappa_vs_delta_grid(survey, fig=fig)
+    _drawn(fig)
+    for ax in [a for a in fig.axes if a.axison]:
+        assert _visible_labels(ax, "x") and _visible_labels(ax, "y"), ax.get_title()
+    for label in (fig._supxlabel, fig._supylabel, fig._suptitle):
+        assert _inside(fig, label), label.get_text()
+        assert label.get_window_extent().y1 <= fig.bbox.y1 + 1, label.get_text()
+
+
+def test_diagonal_legend_names_joints_and_sits_beside_the_data():
+    t = np.linspace(0.0, 1.0, 20)
+    fig = Figure(figsize=(6.4, 4.0), layout="constrained")
+    ax = figures.plot_diagonal(
+        t,
+        np.ones((20, 3)) * [1.0, 2.0, 3.0],
+        names=("shoulder", "elbow", "wrist"),
+        ax=fig.subplots(),
+    )
+    legend = ax.get_legend()
+    assert [x.get_text() for x in legend.get_texts()] == [
+        "M_ii of shoulder",
+        "M_ii of elbow",
+        "M_ii of wrist",
+    ]
+    renderer = _drawn(fig)
+    assert legend.get_window_extent(renderer).x0 >= ax.get_window_extent(renderer).x1
+    with pytest.raises(ValueError, match="2 names for 3"):
+        figures.plot_diagonal(t, np.ones((20, 3)), names=("a", "b"), ax=_axes())
+
+
+def test_the_animation_text_does_not_overlap_its_title():
+    t = np.linspace(0.0, 1.0, 3)
+    xy = np.zeros((3, 3, 2))
+    xy[:, 1, 0], xy[:, 2, 0] = 1.0, 2.0
+    fig = Figure(figsize=(5, 5), layout="constrained")
+    animation = figures.animate_chain(
+        t, xy, np.array([10.0, 100.0, 1000.0]), title="a title", fig=fig
+    )
+    renderer = _drawn(fig)
+    animation._func(2)  # the last frame's text
+    renderer = _drawn(fig)
+    (ax,) = [a for a in fig.axes if a.get_xlabel() == "x [m]"]
+    (text,) = [x for x in ax.texts if x.get_text().startswith("t = ")]
+    title, words = fig._suptitle.get_window_extent(renderer), text.get_window_extent(renderer)
+    assert not title.overlaps(words)
+    assert words.y0 >= ax.get_window_extent(renderer).y1  # above the drawing, not on it
+
+
+def test_watch_plot_draws_the_watched_metrics_and_the_threshold():
+    import gimwatch as gw
+
+    robot = gw.load_robot("chain:4")
+    watch = gw.Watch(
+        robot,
+        ("diagonal_ratio", "kappa", "eigenvalues"),
+        alarm_metric="kappa",
+        alarm_threshold=50.0,
+        warn=False,
+    )
+    for k, q in enumerate(gw.random_configurations(robot, 5, seed=0)):
+        watch.sample(0.1 * k, q)
+    ax = watch.plot(ax=_axes())
+    lines = {line.get_label(): line for line in ax.get_lines()}
+    assert set(lines) == {"diagonal_ratio", "kappa", "alarm: kappa > 50"}
+    np.testing.assert_array_equal(lines["kappa"].get_ydata(), watch.array("kappa"))
+    _assert_units(ax, "plot_watch")
+    with pytest.raises(gw.InputError):
+        watch.plot(("eigenvalues",), ax=_axes())

@@ -20,7 +20,7 @@ from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.simulation.scene import load_scene, parse_scene
 from gimwatch.simulation.simulate import Simulation, run_scene
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "gimwatch" / "scenes"
 G = np.array([0.0, 0.0, -9.81])
 GRAVITY = {"gravity": {"vector": G.tolist()}}
 KINOVA_V = {"j2s6s200_joint_1": 1.0, "j2s6s200_joint_3": -1.5}

@@ -46,7 +46,6 @@ def test_random_configurations_are_seeded_valid_and_within_limits(spec):
         ("chain:x", InputError, "the N of chain:N must be a positive integer, got 'x'"),
         ("chain:0", InputError, "the number of links must be an integer between 1"),
         ("missing.urdf", URDFError, "missing.urdf: no such file"),
-        ("iris", RobotError, "robot 'iris': has no degree of freedom with a fixed base"),
         ("cassie", RobotError, "robot 'cassie': example-robot-data ships it only as SDF"),
     ],
 )
@@ -54,6 +53,13 @@ def test_bad_specs_name_what_is_wrong(spec, error, message):
     with pytest.raises(error) as info:
         load_robot(spec)
     assert str(info.value).startswith(message)
+
+
+def test_a_drone_has_no_joint_on_a_fixed_base():
+    assert load_robot("iris").floating  # example-robot-data's base: a free-flyer
+    with pytest.raises(RobotError) as info:
+        load_robot("iris", floating=False)
+    assert str(info.value).startswith("robot 'iris': has no degree of freedom with a fixed base")
 
 
 def test_a_directory_is_not_a_urdf(tmp_path):

@@ -238,3 +238,23 @@ def test_progress_stops_a_run_by_returning_a_message():
 
     run = Simulation(_scene(integrator={"method": "RK4", "dt": 0.01})).run(progress=budget)
     assert (run.status, run.message, run.steps) == ("stopped", "enough", 3)
+
+
+@pytest.mark.parametrize("method", sorted(integrators.INTEGRATORS))
+@pytest.mark.parametrize("argument", ["q", "v"])
+def test_a_law_that_writes_to_q_or_v_is_an_error_naming_it_on_every_integrator(method, argument):
+    """Writing to the state would change the run behind the integrator's back (silently)."""
+    robot = "kinova" if argument == "q" else "chain:3"  # kinova: continuous joints, q on S¹
+
+    def meddler(t, q, v):
+        (q if argument == "q" else v).__imul__(0.0)
+        return np.zeros(v.size)
+
+    spec = {"method": method} | ({"dt": 0.01} if method in ("RK4", "semi-implicit-euler") else {})
+    with pytest.raises(TorqueLawError, match=r"meddler.*must not modify q or v"):
+        run_scene(_scene(robot, integrator=spec), torque_law=meddler)
+
+
+def test_a_law_returning_v_itself_does_not_alias_the_state():
+    tau = run_scene(_scene("chain:2"), torque_law=lambda t, q, v: v)
+    assert tau.status == "completed"

@@ -8,7 +8,7 @@ import pytest
 from gimwatch.cli import main
 from gimwatch.output.folders import write_marker
 
-SCENES = Path(__file__).resolve().parents[1] / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "gimwatch" / "scenes"
 
 
 def test_simulate_command_writes_a_complete_results_folder(tmp_path, capsys):

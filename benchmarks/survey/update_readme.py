@@ -1,6 +1,6 @@
 """Splice benchmarks/survey/table.md into docs/findings/survey.md between the survey-table markers.
 
-Run by `make survey` after `gimwatch survey all --samples 200 --trajectory -o benchmarks/survey`.
+Run by `make survey` after `gimwatch survey all --fixed --samples 200 --trajectory -o benchmarks/survey`.
 """
 
 from __future__ import annotations

@@ -1,13 +1,13 @@
 """What accuracy costs in time: the sections of ``gimwatch bench`` and the run that ties them.
 
 Each section is a module of this package with ``run(context) -> SectionResult``; the
-:data:`SECTIONS` registry names them. A section whose module cannot be imported (an optional
+`SECTIONS` registry names them. A section whose module cannot be imported (an optional
 dependency missing) is reported as skipped by ``all`` and refused when asked for by name.
 
 Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder's
 staging copy as soon as it finishes; ``report.md`` is then written from the sections that
 finished, headed by versions, date, CPU and thread settings, and the folder is swapped into
-place (:mod:`gimwatch.output.folders`), even when the run was interrupted: it keeps what it
+place (`gimwatch.output.folders`), even when the run was interrupted: it keeps what it
 measured. Files of the previous folder that this run does not rewrite are kept (other
 sections' tables, the folder's README).
 """
@@ -17,9 +17,10 @@ from __future__ import annotations
 import importlib
 import importlib.util
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
+from gimwatch.bench.records import BenchContext, SectionResult, Table
 from gimwatch.errors import InputError
 from gimwatch.output.folders import ResultsFolder
 
@@ -32,62 +33,6 @@ __all__ = [
     "run_bench",
     "section_status",
 ]
-
-
-@dataclass(frozen=True)
-class Table:
-    """A result table with fixed columns (CSV header and JSON keys, in this order)."""
-
-    name: str
-    columns: tuple[str, ...]
-    rows: list[dict] = field(default_factory=list)
-
-    def add(self, **row: object) -> None:
-        """Append a row; its keys must be exactly the table's columns."""
-        if set(row) != set(self.columns):
-            missing, extra = set(self.columns) - set(row), set(row) - set(self.columns)
-            raise KeyError(f"table {self.name}: missing {sorted(missing)}, extra {sorted(extra)}")
-        self.rows.append({c: row[c] for c in self.columns})
-
-
-@dataclass
-class SectionResult:
-    """What one section measured: tables, figure files, and its Markdown text.
-
-    Attributes:
-        name: The section's registry name.
-        title: Its heading.
-        tables: The fixed-column tables (written as ``<name>.csv`` and ``<name>.json``).
-        figures: PNG files written into the output folder.
-        markdown: The section's report text (headline tables and conclusions).
-        headline: A shorter text for the docs page "What accuracy costs".
-        summary: Key figures for ``summary.json`` (ratios, acceptance checks).
-    """
-
-    name: str
-    title: str
-    tables: list[Table] = field(default_factory=list)
-    figures: list[Path] = field(default_factory=list)
-    markdown: str = ""
-    headline: str = ""
-    summary: dict = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class BenchContext:
-    """What a section gets: where to write, how big to go, where to say how far it is.
-
-    Attributes:
-        output: The output folder (exists).
-        quick: Tiny sizes: a smoke run for CI, numbers meaningless.
-        progress: Called with one line of progress (the CLI prints it on stderr).
-        seed: Seed of every random draw in the run.
-    """
-
-    output: Path
-    quick: bool = False
-    progress: Callable[[str], None] = lambda line: None
-    seed: int = 0
 
 
 @dataclass(frozen=True)
@@ -127,7 +72,13 @@ SECTIONS: dict[str, Section] = {
             "Cost of the watch in a MuJoCo loop",
             "gimwatch.bench.watch_mujoco",
         ),
+        Section(
+            "watch_overhead",
+            "The watch sample against the bare computation",
+            "gimwatch.bench.watch_overhead",
+        ),
         Section("denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section"),
+        Section("explain", "Conditioning maps", "gimwatch.bench.explain_maps"),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),
         Section("lean", "δ at the cost of its arithmetic", "gimwatch.bench.lean_cost"),
         Section(

@@ -5,13 +5,13 @@ links, in three families: ``straight`` (the paper chain at q = 0), ``random`` (t
 chain at a seeded random configuration) and ``tapered`` (mass and length falling
 geometrically from root to tip, 2.2 kg → 0.022 kg and 1 m → 0.1 m). Velocities and torques
 are seeded random draws. q̈ from each method is compared with
-:class:`gimwatch.stress.reference_planar.PlanarChainReference` at 50 digits:
+[`PlanarChainReference`][gimwatch.stress.reference_planar.PlanarChainReference] at 50 digits:
 
 * ``aba`` — Pinocchio's articulated-body algorithm, O(n);
 * ``crba_pin_cholesky`` — CRBA + Pinocchio's sparse UDUᵀ ``cholesky.decompose/solve``;
 * ``crba_cho_solve`` — CRBA + LAPACK Cholesky (``scipy.linalg.cho_factor/cho_solve``);
 * ``numpy_solve`` — CRBA + ``numpy.linalg.solve`` (LU with partial pivoting);
-* ``denoc`` — gimwatch's DeNOC forward dynamics, when :mod:`gimwatch.denoc` is present.
+* ``denoc`` — gimwatch's DeNOC forward dynamics, when [`gimwatch.denoc`][gimwatch.denoc] is present.
 
 Backward-stable solvers give errors up to about κ·eps.
 """

@@ -5,10 +5,12 @@ method is timed (median per call) and compared with the exact κ₂ from CRBA + 
 
 * ``kappa_crba_eigvalsh`` — M by CRBA, κ₂ = λmax/λmin by LAPACK syevr (O(n³));
 * ``delta_crba_diagonal`` — M by CRBA, δ from its diagonal (O(n²));
-* ``delta_on_diagonal`` — δ from :func:`gimwatch.model.inertia.gim_diagonal`, O(n), no M;
+* ``delta_on_diagonal`` — δ from
+  [`gim_diagonal`][gimwatch.model.inertia.gim_diagonal], O(n), no M;
 * ``pocon_cholesky`` — M by CRBA, Cholesky, LAPACK pocon's κ₁ estimate (O(n³) + O(n²));
 * ``kappa_lanczos_*`` — κ₂ from Lanczos on the RNEA (M·x) and ABA (M⁻¹·x) operators
-  (:func:`gimwatch.metrics.matrix_free.kappa_matrix_free`), at ARPACK tolerance 1e-10 and 1e-3.
+  ([`kappa_matrix_free`][gimwatch.metrics.matrix_free.kappa_matrix_free]), at ARPACK tolerance 1e-10
+  and 1e-3.
 
 Pinocchio's Data grows as nv³ (≈ 1.2 GB at nv = 300), so above nv = 400 a fresh Data is
 built for that size only when the machine has room for it, and freed before the next size.

@@ -1,11 +1,11 @@
 """The paper's claim in one table: δ, αδ and the κ tracker — cost and error side by side.
 
 Shah & Saha (2013) offer δ (and αδ, Eq. 15) as a conditioning estimate "without incurring
-expensive computation of the condition number". :func:`claim_table` answers that from the
+expensive computation of the condition number". `claim_table` answers that from the
 files ``gimwatch bench lean tracker -o benchmarks/cost`` writes (``lean.csv``,
 ``tracker_samples.csv``, ``tracker_claim.csv``): what one watch sample of each estimator
 costs, against one ``pinocchio.aba`` call and against κ by CRBA + ``eigvalsh``, and how far it
-is from κ along the paper's own trajectories. :func:`update_cost_page` writes the table
+is from κ along the paper's own trajectories. `update_cost_page` writes the table
 between the ``<!-- cost:start -->`` and ``<!-- cost:end -->`` markers of a Markdown page
 (``docs/findings/cost.md``); a test regenerates it from the committed files.
 """
@@ -93,7 +93,7 @@ def tracker_targets(folder: str | Path) -> str:
 def update_cost_page(page: str | Path, folder: str | Path) -> Path:
     """Replace the block between the cost markers of ``page`` with the table and the targets.
 
-    The block is :func:`claim_table`, a blank line, then :func:`tracker_targets`.
+    The block is `claim_table`, a blank line, then `tracker_targets`.
 
     Raises:
         InputError: The page lacks the markers, or a bench file is missing.

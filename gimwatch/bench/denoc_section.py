@@ -6,10 +6,10 @@ the GIM (DeNOC Eqs. 11–13 vs ``pinocchio.crba``), its O(n) diagonal (no Pinocc
 counterpart: ``gimwatch.model.inertia.gim_diagonal`` is listed for scale), inverse dynamics (vs
 ``rnea``) and forward dynamics (Saha's UDUᵀ recursion vs ``aba``; through the checked
 ``DenocModel`` API and through ``DenocModel.lean()``, one compiled call): median time per call
-(:func:`gimwatch.bench.timing.time_call`) and the ratio DeNOC / Pinocchio.
+(`gimwatch.bench.timing.time_call`) and the ratio DeNOC / Pinocchio.
 
 Pinocchio's Data grows as nv³; above nv = 400 it is built only when it fits in half the
-available memory (:func:`gimwatch.bench.timing.data_if_it_fits`) and freed before the next
+available memory (`gimwatch.bench.timing.data_if_it_fits`) and freed before the next
 size, else Pinocchio is not timed at that size and the row says so.
 """
 

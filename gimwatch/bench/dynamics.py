@@ -1,14 +1,14 @@
 """Section ``dynamics``: what one forward-dynamics evaluation costs, per backend and n.
 
-Every backend of :data:`gimwatch.simulation.backends.BACKENDS` (``aba``, ``crba-cholesky``,
+Every backend of `gimwatch.simulation.backends.BACKENDS` (``aba``, ``crba-cholesky``,
 ``denoc``, and any registered later) is built for the paper's chain of n rods under
 gravity (−y) and its ``forward_dynamics(q, v, τ)`` — one right-hand-side evaluation of a
 simulation step; RK4 makes 4 per step, DOP853 12 — is timed at one seeded random state
-(median per call, :func:`gimwatch.bench.timing.time_call`). Ratios are to ``aba`` in the
+(median per call, `gimwatch.bench.timing.time_call`). Ratios are to ``aba`` in the
 same run.
 
 Above nv = 400 the Pinocchio backends would refuse to build their Data (it grows as nv³);
-the benchmark hands them one from :func:`gimwatch.bench.timing.data_if_it_fits` when it
+the benchmark hands them one from `gimwatch.bench.timing.data_if_it_fits` when it
 fits in half the available memory (else the row is left empty and says why) and frees it
 before the next backend.
 """

@@ -6,8 +6,8 @@ cost per evaluation is timed on a few samples (median). Sweeps:
 
 * ``random`` — independent configurations drawn uniformly within the joint limits;
 * ``swing`` — for the paper's 4-, 10- and 20-link chains, the samples of their swinging
-  trajectories (``scenes/chain_<n>.toml``: straight and horizontal at rest under gravity,
-  DOP853 at 1e-10, the first :data:`SWING_DURATION_S` seconds), where κ sweeps from its
+  trajectories (``gimwatch/scenes/chain_<n>.toml``: straight and horizontal at rest under gravity,
+  DOP853 at 1e-10, the first `SWING_DURATION_S` seconds), where κ sweeps from its
   straight-chain maximum through folded configurations.
 
 Estimators (Shah & Saha 2013 and the free Rayleigh bounds, since M_ii = e_iᵀ M e_i):

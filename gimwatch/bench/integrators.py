@@ -1,23 +1,23 @@
 """Section ``integrators``: work-precision of gimwatch's integrators, MuJoCo as a peer.
 
-The paper's swinging 10- and 20-link chains (``scenes/chain_10.toml``, ``chain_20.toml``:
+The paper's swinging 10- and 20-link chains (``gimwatch/scenes/chain_10.toml``, ``chain_20.toml``:
 straight and horizontal at rest, gravity −y in the plane of motion, 5 s) are run with every
-integrator of :class:`gimwatch.simulation.simulate.Simulation` and the ``aba`` backend, the δ watch
-on
+integrator of [`Simulation`][gimwatch.simulation.simulate.Simulation]
+and the ``aba`` backend, the δ watch on
 (``diagonal_ratio`` at the scene's samples, every 0.01 s), energy evaluated at the samples:
 
 * SciPy's DOP853, RK45, Radau, LSODA at rtol = atol = 1e-3 … 1e-12;
 * fixed-step RK4 and semi-implicit Euler at dt = 1e-2 … 1e-5;
 * MuJoCo's RK4 and (semi-implicit) Euler at the same steps, on the same URDF
-  (:mod:`gimwatch.bench.mujoco_peer`; its mass matrix is checked against CRBA first).
+  (`gimwatch.bench.mujoco_peer`; its mass matrix is checked against CRBA first).
 
 Each run reports its final-state error max |q(T) − q_ref(T)| (rad) and velocity error
 against a tight reference — DOP853 at rtol = atol = 1e-14 (SciPy raises rtol to 2.2e-14),
 whose own uncertainty is estimated by its distance to DOP853 at 1e-13 — and the relative
 energy drift, wall time (integration loop, samples included; median of 3 runs under
 0.5 s), dynamics evaluations and steps. Runs are capped: a fixed-step run predicted
-(from the previous step size) to exceed :data:`CAP_S` is skipped, an adaptive run is
-aborted at :data:`CAP_S` and the tighter tolerances of that method are skipped; the rows
+(from the previous step size) to exceed `CAP_S` is skipped, an adaptive run is
+aborted at `CAP_S` and the tighter tolerances of that method are skipped; the rows
 say so.
 """
 
@@ -27,7 +27,6 @@ import itertools
 import time
 import tomllib
 import warnings
-from pathlib import Path
 
 import numpy as np
 
@@ -35,13 +34,14 @@ from gimwatch.bench import BenchContext, SectionResult, Table, mujoco_peer
 from gimwatch.bench.plots import plot_work_precision
 from gimwatch.bench.report import markdown_table
 from gimwatch.errors import InputError
+from gimwatch.simulation.bundled_scenes import SCENES_DIR
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.scene_integrator import MAX_FIXED_STEPS
 from gimwatch.simulation.simulate import Simulation
 
 __all__ = ["CAP_S", "COLUMNS", "TARGET_ERROR_RAD", "chain_scene_table", "run"]
 
-SCENES = Path(__file__).resolve().parents[2] / "scenes"
+SCENES = SCENES_DIR
 ADAPTIVE = ("DOP853", "RK45", "Radau", "LSODA")
 FIXED = ("RK4", "semi-implicit-euler")
 TOLERANCES = tuple(10.0**-k for k in range(3, 13))
@@ -67,7 +67,7 @@ COLUMNS = (
 
 
 def chain_scene_table(n: int, *, duration_s: float | None = None) -> dict:
-    """The TOML table of ``scenes/chain_<n>.toml`` with the δ watch only and ``aba``.
+    """The TOML table of ``gimwatch/scenes/chain_<n>.toml`` with the δ watch only and ``aba``.
 
     Args:
         n: 4, 10 or 20 (the scenes that exist).

@@ -1,15 +1,16 @@
 """Section ``lean``: what one δ sample costs, against Pinocchio's ABA and against κ by eig.
 
 For the paper's chain of n rods (one seeded set of random configurations per n), side by side
-in one run, median µs per call (:func:`gimwatch.bench.timing.time_call`, BLAS on one thread —
+in one run, median µs per call (`gimwatch.bench.timing.time_call`, BLAS on one thread —
 the CLI pins it with threadpoolctl):
 
-* ``delta_watch_us`` — one :meth:`gimwatch.metrics.watch.Watch.sample` watching δ only, what a
-  simulation pays per sample (the watch takes diag M from DeNOC's compiled
-  :class:`~gimwatch.denoc.lean.LeanModel`: one call, buffers preallocated);
+* ``delta_watch_us`` — one
+  [`sample`][gimwatch.watch.watch.Watch.sample] watching δ only, what
+  a simulation pays per sample (the watch takes diag M from DeNOC's compiled
+  [`LeanModel`][gimwatch.denoc.LeanModel]: one call, buffers preallocated);
 * ``delta_lean_us`` — δ alone from ``LeanModel.diagonal_ratio`` (one compiled call);
 * ``delta_pinocchio_us`` — the Pinocchio route: ``computeCentroidalMap`` + the column dot
-  products of :func:`gimwatch.model.inertia.gim_diagonal`, then δ;
+  products of [`gim_diagonal`][gimwatch.model.inertia.gim_diagonal], then δ;
 * ``aba_call_us`` — one ``pinocchio.aba`` call; ``rk4_step_us`` — a bare RK4 step (4 ABA
   calls and the stage arithmetic, nothing else);
 * ``kappa_eig_us`` — κ by CRBA + ``eigvalsh``.
@@ -17,7 +18,7 @@ the CLI pins it with threadpoolctl):
 Ratios: the watch's δ sample against one ABA call and against the bare RK4 step (its cost if
 it sampled every step), and κ-eig / δ-O(n) (the lean call: δ by the O(n) route itself).
 Pinocchio's Data grows as nv³: above ``DATA_NV_LIMIT`` it is built deliberately, only when
-it fits in half the available memory (:func:`gimwatch.bench.timing.data_if_it_fits`), and
+it fits in half the available memory (`gimwatch.bench.timing.data_if_it_fits`), and
 freed before the next size.
 """
 
@@ -34,10 +35,10 @@ from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits, time_call
 from gimwatch.metrics.conditioning import diagonal_ratio
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.inertia import gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
 from gimwatch.simulation.backends import DenocBackend
+from gimwatch.watch.watch import Watch
 
 __all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "TARGETS", "run"]
 

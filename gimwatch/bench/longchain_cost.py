@@ -170,7 +170,7 @@ def run(context: BenchContext) -> SectionResult:
     )
     text = (
         "The O(n) path never builds Pinocchio's Data (memory ∝ n³) nor the dense M "
-        "(`gimwatch/denoc/compiled.py`, numba).\n\n"
+        "(`gimwatch/denoc/fused.py`, numba).\n\n"
         f"Forward dynamics per call:\n\n{step_md}\n\n"
         f"`gimwatch analyze chain:N --json --backend denoc`, a fresh process each "
         f"(import and JIT-cache load included):\n\n{analyze_md}\n\n"

@@ -1,18 +1,18 @@
 """MuJoCo as a peer simulator: the same URDF, the same physics, its own integrators.
 
 MuJoCo (optional extra ``gimwatch[peers]``) reads URDF through
-:func:`mujoco.MjModel.from_xml_string`. The robot's URDF text is passed unchanged except
+`mujoco.MjModel.from_xml_string`. The robot's URDF text is passed unchanged except
 for one ``<mujoco><compiler .../></mujoco>`` block after the ``<robot>`` tag:
 
 * ``discardvisual`` and ``fusestatic="false"`` keep the kinematic tree as the URDF has it;
-* ``boundinertia`` = :data:`INERTIA_FLOOR` lifts the slender rods' zero axial inertia
+* ``boundinertia`` = `INERTIA_FLOOR` lifts the slender rods' zero axial inertia
   (I_xx = 0, which MuJoCo rejects) to 1e-12 kg·m²; rotating about z only, the planar
   chains never feel it (the mass-matrix check below shows it).
 
 Then, on the compiled model: constraints, contacts, joint limits, springs and dampers off;
-joint armature and damping zero; gravity set to the scene's vector. :func:`mass_matrix`
+joint armature and damping zero; gravity set to the scene's vector. `mass_matrix`
 gives ``mj_fullM`` after ``mj_forward``, to be compared with Pinocchio's CRBA before any
-timing. :func:`simulate` steps with ``mj_step(m, d, nstep)`` between samples and evaluates
+timing. `simulate` steps with ``mj_step(m, d, nstep)`` between samples and evaluates
 the energy (``mj_energyPos`` + ``mj_energyVel``) at the samples only.
 """
 
@@ -123,10 +123,10 @@ def simulate(
     """Integrate from (q0, v0) with MuJoCo's ``method`` at step ``dt`` for ``duration_s``.
 
     Args:
-        model: From :func:`load_model` (its timestep and integrator are set here).
+        model: From `load_model` (its timestep and integrator are set here).
         q0: Initial configuration.
         v0: Initial velocity.
-        method: A key of :data:`METHODS`.
+        method: A key of `METHODS`.
         dt: Step (s); ``sample_s`` must be a multiple of it.
         duration_s: Length of the run (s), a multiple of ``sample_s``.
         sample_s: Energy is evaluated every ``sample_s`` seconds.

@@ -3,7 +3,7 @@
 Each ``draw_*`` function takes table rows, draws on ``ax`` (a new figure's axes when None)
 and returns the Axes, with units on both axes; it never selects a backend or shows. Each
 ``plot_*`` function draws a whole figure from the rows and writes it to a PNG atomically.
-:func:`replot` redraws every figure of a benchmark folder from its committed JSON tables,
+`replot` redraws every figure of a benchmark folder from its committed JSON tables,
 without measuring anything (``gimwatch bench --replot``).
 """
 
@@ -77,14 +77,14 @@ def draw_cost_vs_n(rows: list[dict], *, ax=None):
 
 
 def plot_cost_vs_n(rows: list[dict], path: Path) -> Path:
-    """``conditioning_cost.png``: :func:`draw_cost_vs_n`."""
+    """``conditioning_cost.png``: `draw_cost_vs_n`."""
     return _one_panel(draw_cost_vs_n, rows, path)
 
 
 def draw_pareto(rows: list[dict], *, exact: bool = False, ax=None):
     """Median relative error against κ vs cost per evaluation, one marker per estimator.
 
-    ``exact`` selects the estimators whose median error is below :data:`EXACT_ERROR`
+    ``exact`` selects the estimators whose median error is below `EXACT_ERROR`
     (round-off only), else the approximate ones: drawn apart, each group fills its axes
     instead of crowding one corner of a 1e-16…1 range.
     """
@@ -150,7 +150,7 @@ def draw_accuracy_vs_kappa(rows: list[dict], *, ax=None):
 
 
 def plot_accuracy_vs_kappa(rows: list[dict], path: Path) -> Path:
-    """``accuracy_vs_kappa.png``: :func:`draw_accuracy_vs_kappa`."""
+    """``accuracy_vs_kappa.png``: `draw_accuracy_vs_kappa`."""
     return _one_panel(draw_accuracy_vs_kappa, rows, path)
 
 
@@ -181,7 +181,7 @@ def draw_watch_cost(rows: list[dict], *, ax=None):
 
 
 def plot_watch_cost(rows: list[dict], path: Path) -> Path:
-    """``watch_cost.png``: :func:`draw_watch_cost`."""
+    """``watch_cost.png``: `draw_watch_cost`."""
     return _one_panel(draw_watch_cost, rows, path)
 
 
@@ -209,7 +209,7 @@ def draw_dynamics_cost(rows: list[dict], *, ax=None):
 
 
 def plot_dynamics_cost(rows: list[dict], path: Path) -> Path:
-    """``dynamics_cost.png``: :func:`draw_dynamics_cost`."""
+    """``dynamics_cost.png``: `draw_dynamics_cost`."""
     return _one_panel(draw_dynamics_cost, rows, path)
 
 
@@ -225,7 +225,7 @@ def draw_denoc_cost(rows: list[dict], *, ax=None):
 
 
 def plot_denoc_cost(rows: list[dict], path: Path) -> Path:
-    """``denoc_cost.png``: :func:`draw_denoc_cost`."""
+    """``denoc_cost.png``: `draw_denoc_cost`."""
     return _one_panel(draw_denoc_cost, rows, path)
 
 
@@ -260,7 +260,7 @@ def draw_work_precision(rows: list[dict], n: int, *, ax=None):
 
 
 def plot_work_precision(rows: list[dict], path: Path) -> Path:
-    """``work_precision.png``: one :func:`draw_work_precision` panel per chain."""
+    """``work_precision.png``: one `draw_work_precision` panel per chain."""
     from matplotlib.figure import Figure
 
     chains = list(dict.fromkeys(r["n"] for r in rows))

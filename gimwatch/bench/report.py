@@ -18,7 +18,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from gimwatch._version import __version__
-from gimwatch.bench import SectionResult, Table
+from gimwatch.bench.records import SectionResult, Table
 from gimwatch.bench.timing import blas_thread_ratio, thread_settings
 from gimwatch.errors import InputError
 from gimwatch.output.atomic import write_json_atomic, write_text_atomic

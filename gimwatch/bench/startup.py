@@ -13,6 +13,10 @@ interleaved so that a busy moment on the machine hits them alike; medians are re
 * once, outside the repeats, ``gimwatch demo`` (the main job, without the GIF) and
   ``gimwatch simulate`` of the 10-link chain scene with κ and δ watched.
 
+The section's summary records which gimwatch modules the measured processes import and a
+digest of each (`gimwatch.bench.freshness`): ``tests/test_docs.py`` fails when the code
+changed since, so the times quoted in the docs are never older than the code.
+
 Targets: ``import gimwatch`` at most 0.3 s more than ``import pinocchio``; ``gimwatch analyze
 ur5`` at most 1.5x the bare script; ``gimwatch demo`` at most 30 s.
 """
@@ -27,6 +31,7 @@ import time
 from pathlib import Path
 
 from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench.freshness import FINGERPRINT_KEY, fingerprint, modules_imported_by
 from gimwatch.bench.report import markdown_table
 
 __all__ = ["BARE_UR5", "CASES", "COLUMNS", "run"]
@@ -62,6 +67,18 @@ ANALYZE_TARGET_RATIO = 1.5
 DEMO_TARGET_S = 30.0
 
 
+#: Processes of the same code paths as the "once" cases, for the fingerprint (short runs).
+ONCE_PROBES: dict[str, list[str]] = {
+    "gimwatch demo": ["-m", "gimwatch", "demo", "--duration", "0.05", "-o", "probe-demo"],
+    "gimwatch simulate chain_10": ["-m", "gimwatch", "simulate", "chain_10", "-o", "probe-run"],
+}
+
+
+def measured_code(cases: list[list[str]], cwd: Path) -> dict:
+    """The fingerprint of the gimwatch modules that ``cases`` import."""
+    return fingerprint(modules_imported_by(cases, cwd))
+
+
 def _wall(argv: list[str], cwd: Path) -> float:
     start = time.perf_counter()
     done = subprocess.run(
@@ -73,8 +90,8 @@ def _wall(argv: list[str], cwd: Path) -> float:
     return wall
 
 
-def measure(context: BenchContext) -> tuple[Table, dict[str, float]]:
-    """Time every case in fresh processes; return the table and the medians by case."""
+def measure(context: BenchContext) -> tuple[Table, dict[str, float], dict]:
+    """Time every case in fresh processes; the table, the medians by case, the fingerprint."""
     repeats = 1 if context.quick else 9
     samples: dict[str, list[float]] = {name: [] for name in CASES}
     with tempfile.TemporaryDirectory() as folder:
@@ -89,12 +106,14 @@ def measure(context: BenchContext) -> tuple[Table, dict[str, float]]:
         if not context.quick:
             context.progress("  gimwatch demo (once)")
             once["gimwatch demo"] = _wall(["-m", "gimwatch", "demo", "-o", "demo"], cwd)
-        scene = Path(__file__).resolve().parents[2] / "scenes" / "chain_10.toml"
-        if scene.exists() and not context.quick:
+        if not context.quick:
             context.progress("  gimwatch simulate chain_10 (once)")
-            once["gimwatch simulate scenes/chain_10.toml"] = _wall(
-                ["-m", "gimwatch", "simulate", str(scene), "-o", "run"], cwd
+            once["gimwatch simulate chain_10"] = _wall(
+                ["-m", "gimwatch", "simulate", "chain_10", "-o", "run"], cwd
             )
+        context.progress("  which modules the cases import (fingerprint)")
+        probes = [argv for name, argv in CASES.items() if "gimwatch" in name]
+        code = measured_code(probes + [ONCE_PROBES[name] for name in once], cwd)
     table = Table("startup", COLUMNS)
     medians = {}
     for name, values in samples.items():
@@ -109,12 +128,12 @@ def measure(context: BenchContext) -> tuple[Table, dict[str, float]]:
     for name, value in once.items():
         medians[name] = value
         table.add(case=name, repeats=1, median_s=value, min_s=value, max_s=value)
-    return table, medians
+    return table, medians, code
 
 
 def run(context: BenchContext) -> SectionResult:
     """Measure and summarise against the targets."""
-    table, medians = measure(context)
+    table, medians, code = measure(context)
     import_extra = medians["import gimwatch"] - medians["import pinocchio"]
     first_extra = medians["import gimwatch + first names"] - medians["import pinocchio"]
     ratio = medians["gimwatch analyze ur5"] / medians["bare ur5 (pinocchio crba + eigvalsh)"]
@@ -127,6 +146,7 @@ def run(context: BenchContext) -> SectionResult:
         "import_target_met": import_extra <= IMPORT_TARGET_S,
         "analyze_target_met": ratio <= ANALYZE_TARGET_RATIO,
         "demo_target_met": None if demo is None else demo <= DEMO_TARGET_S,
+        FINGERPRINT_KEY: code,
     }
 
     def verdict(ok: bool | None) -> str:
@@ -149,10 +169,10 @@ def run(context: BenchContext) -> SectionResult:
             f"no GIF) takes {demo:.1f} s (target ≤ {DEMO_TARGET_S:g} s: "
             f"{verdict(summary['demo_target_met'])})."
         )
-    simulate = medians.get("gimwatch simulate scenes/chain_10.toml")
+    simulate = medians.get("gimwatch simulate chain_10")
     if simulate is not None:
         lines.append(
-            f"- `gimwatch simulate scenes/chain_10.toml` (5 s of the 10-link chain, DOP853 at "
+            f"- `gimwatch simulate chain_10` (5 s of the 10-link chain, DOP853 at "
             f"1e-10, κ and δ watched, results folder with plots) takes {simulate:.1f} s."
         )
     headline = "\n".join(lines)

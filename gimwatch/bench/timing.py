@@ -1,8 +1,8 @@
 """Timing for the benchmarks: warm-up, repeats, medians; BLAS thread settings.
 
-Every cost in ``gimwatch bench`` comes from :func:`time_call`: the call is warmed up, then
+Every cost in ``gimwatch bench`` comes from `time_call`: the call is warmed up, then
 timed in ``repeats`` rounds of ``number`` calls each (``number`` chosen so a round lasts at
-least ``min_round_s``, as :mod:`timeit`'s autorange does), and the median of the per-call
+least ``min_round_s``, as `timeit`'s autorange does), and the median of the per-call
 times is kept. Ratios are always taken between medians measured in the same run.
 """
 

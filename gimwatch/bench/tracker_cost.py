@@ -11,18 +11,18 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   ``eigvalsh`` of CRBA's M and λmin from ``eigvalsh`` of Pinocchio's ``computeMinverse``
   (each the largest eigenvalue of its matrix, so float64 resolves it even at κ ~ 1e11, where
   the plain dense κ = eig(M) has lost its digits — its own error is listed). Methods: the
-  tracker (:class:`gimwatch.metrics.tracker.KappaTracker` on DeNOC's lean products,
-  tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's previous
-  matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the previous
-  eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
+  tracker ([`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on
+  DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's
+  previous matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the
+  previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
   means nothing (eps·κ ≈ 1e-3): the tracker is compared with cold-start Lanczos at 1e-10 on
-  DeNOC's operators (:func:`gimwatch.denoc.extreme_eigenvalues`).
-* ``tracker_claim`` — along the paper's own trajectories (``scenes/chain_{4,10,20}.toml``): δ, αδ
-  (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch metric: median cost
-  of one :meth:`~gimwatch.metrics.watch.Watch.sample` and the median / max relative error
-  against κ.
-* ``tracker_chain_1000`` — ``scenes/chain_1000.toml`` (DOP853 on DeNOC) run watching δ alone and
-  watching δ and the tracked κ at every sample: wall time of each run (median of runs).
+  DeNOC's operators ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]).
+* ``tracker_claim`` — along the paper's own trajectories (the bundled ``chain_{4,10,20}``
+  scenes): δ, αδ (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch
+  metric: median cost of one [`sample`][gimwatch.watch.watch.Watch.sample] and the median /
+  max relative error against κ.
+* ``tracker_chain_1000`` — the bundled ``chain_1000`` scene (DOP853 on DeNOC) run watching δ alone
+  and watching δ and the tracked κ at every sample: wall time of each run (median of runs).
 """
 
 from __future__ import annotations
@@ -30,7 +30,6 @@ from __future__ import annotations
 import dataclasses
 import gc
 import time
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -44,17 +43,18 @@ from gimwatch.denoc import DenocModel, extreme_eigenvalues
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.metrics.tracker import KappaTracker
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import load_robot
+from gimwatch.simulation.bundled_scenes import SCENES_DIR
 from gimwatch.simulation.scene import load_scene, parse_scene
 from gimwatch.simulation.simulate import Simulation, run_scene
+from gimwatch.watch.watch import Watch
 
 __all__ = ["CLAIM_ESTIMATORS", "TARGETS", "run", "swinging_chain"]
 
 SIZES = (20, 50, 100, 200, 400, 1_000)
 QUICK_SIZES = (8, 20)
-SCENES = Path(__file__).resolve().parents[2] / "scenes"
+SCENES = SCENES_DIR
 #: Issue 16: the tracker within 1e-8 of dense κ; tracker / (CRBA + eigvalsh) ≤ 1/5 for
 #: n ≥ 100, ≤ 1/20 at n = 400; the 1,000-link scene tracking κ ≤ 2× watching δ alone.
 TARGETS = {

@@ -2,7 +2,7 @@
 
 The paper's chain of n rods swings under gravity with fixed-step RK4 (4 ABA calls per
 step, the ``aba`` backend); the watch runs at the samples only, every
-:data:`STEPS_PER_SAMPLE` steps, as in the scenes. Watches (:data:`WATCHES`): none, δ
+`STEPS_PER_SAMPLE` steps, as in the scenes. Watches (`WATCHES`): none, δ
 (O(n) diagonal), αδ (Eq. 15, one eigen-solve at t0), κ by CRBA + eigensolver, and κ by
 warm-started Lanczos at tolerance 1e-3 on the RNEA/ABA operators (``kappa_lanczos``).
 
@@ -10,8 +10,9 @@ Per (n, watch) the section reports
 
 * ``step_us`` — a whole run timed (median of ``repeats`` runs) divided by its steps, and
   ``run_overhead`` — its excess over the bare run (the difference of two run times: noisy);
-* ``sample_us`` — one :meth:`gimwatch.metrics.watch.Watch.sample` timed alone on the bare run's
-  configurations, in order (so Lanczos warm-starts as in a run), median of passes;
+* ``sample_us`` — one [`sample`][gimwatch.watch.watch.Watch.sample]
+  timed alone on the bare run's configurations, in order (so Lanczos warm-starts as in a run),
+  median of passes;
 * ``sample_vs_step`` = sample_us / bare step_us — the watch's cost if it sampled every step;
 * ``amortized`` = sample_us / (STEPS_PER_SAMPLE x bare step_us) — its share at the scenes'
   sampling rate;
@@ -30,10 +31,10 @@ from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import plot_watch_cost
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.robots import load_robot
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import Simulation
+from gimwatch.watch.watch import Watch
 
 __all__ = ["COLUMNS", "STEPS_PER_SAMPLE", "WATCHES", "run"]
 

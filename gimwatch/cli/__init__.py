@@ -2,11 +2,11 @@
 
 This package is the only place that prints or exits. Each subcommand lives in its own
 module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``;
-:data:`COMMANDS` maps each name to its module and one-line help. Only the module of the
+`COMMANDS` maps each name to its module and one-line help. Only the module of the
 command being run is imported (a command's imports cost nothing to the others, nor to
 ``gimwatch --help``). Errors gimwatch raises on purpose become one line on stderr and exit
 status 2; a mistyped command gets a suggestion. SIGINT and SIGTERM end a command with one line
-and exit status 130 or 143 (:mod:`gimwatch.cli._signals`).
+and exit status 130 or 143 (`gimwatch.cli._signals`).
 """
 
 from __future__ import annotations
@@ -67,6 +67,18 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gimwatch.cli.demo",
         "the main job: the paper's swinging 4-, 10- and 20-link chains, watched",
     ),
+    "explain": (
+        "gimwatch.cli.explain",
+        "why kappa is what it is: the modes of lambda_min and lambda_max, ranked sensitivities",
+    ),
+    "map": (
+        "gimwatch.cli.map",
+        "kappa and delta over a grid of two joints or along a trajectory: CSV and PNG heat map",
+    ),
+    "armature": (
+        "gimwatch.cli.armature",
+        "the least joint armature that brings kappa under a target, and what it costs",
+    ),
     "robots": ("gimwatch.cli.robots", "list the robots gimwatch can load: name, nv, base, source"),
     "metrics": ("gimwatch.cli.metrics", "list the metrics gimwatch can compute and watch"),
 }
@@ -98,9 +110,10 @@ class HelpFormatter(argparse.HelpFormatter):
 
 
 def _plain(text: str) -> str:
-    """Drop reST markup from docstrings used as help: ``x`` and :data:`x` become x."""
-    text = re.sub(r":\w+:`~?([^`]+)`", r"\1", text)
-    return text.replace("``", "")
+    """Drop markup from docstrings used as help: ``x``, `x`, [`x`][target] and roles become x."""
+    text = re.sub(r"\[`([^`]+)`\]\[[\w.]*\]", r"\1", text)  # a mkdocstrings cross-reference
+    text = re.sub(r":\w+:`~?([^`]+)`", r"\1", text)  # a Sphinx role
+    return text.replace("``", "").replace("`", "")
 
 
 def _commands() -> dict[str, ModuleType]:
@@ -213,9 +226,3 @@ def _run(argv: Sequence[str] | None) -> int:
     # 20-40x slower on 2 cores, so the command line keeps BLAS on one thread.
     with threadpool_limits(limits=1, user_api="blas"):
         return int(args.run(args))
-
-
-def _entry_point() -> None:  # console script of earlier installs: see gimwatch.__main__
-    from gimwatch.__main__ import entry_point
-
-    entry_point()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 from argparse import ArgumentTypeError
 from collections.abc import Sequence
 
@@ -65,3 +66,36 @@ def non_negative_int(text: str) -> int:
     if value is None or value < 0:
         raise ArgumentTypeError(f"must be an integer >= 0, got {text!r}")
     return value
+
+
+def add_base_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--floating`` / ``--fixed`` into ``floating`` (None: the robot's default base)."""
+    base = parser.add_mutually_exclusive_group()
+    base.add_argument(
+        "--floating",
+        dest="floating",
+        action="store_const",
+        const=True,
+        default=None,
+        help="a free-flyer base (default: example-robot-data's base for its robots, a "
+        "free-flyer for legged robots and humanoids; fixed for chains and files)",
+    )
+    base.add_argument(
+        "--fixed", dest="floating", action="store_const", const=False, help="a fixed base"
+    )
+
+
+def add_mjcf_arguments(parser) -> None:
+    """``--body`` and ``--no-armature``: how an MJCF file is read (ignored for URDF)."""
+    parser.add_argument(
+        "--body",
+        default="",
+        metavar="NAME",
+        help="MJCF: read only the subtree of this body (default: the whole model, free "
+        "objects included, as MuJoCo's nv)",
+    )
+    parser.add_argument(
+        "--no-armature",
+        action="store_true",
+        help="MJCF: leave MuJoCo's joint armature out of M (MuJoCo's M includes it)",
+    )

@@ -1,13 +1,13 @@
 """SIGINT and SIGTERM in the command line: a latch, and exit statuses 130 and 143.
 
-While :data:`LATCH` is installed (for the length of :func:`gimwatch.cli.main`), SIGINT
-(Ctrl-C) and SIGTERM raise :class:`KeyboardInterrupt` where Python code runs, so every
-command stops as on Ctrl-C and keeps what it computed. Inside :meth:`SignalLatch.deferred`
+While `LATCH` is installed (for the length of `gimwatch.cli.main`), SIGINT
+(Ctrl-C) and SIGTERM raise `KeyboardInterrupt` where Python code runs, so every
+command stops as on Ctrl-C and keeps what it computed. Inside `SignalLatch.deferred`
 a signal is only noted:
 
 * ``"hard"`` (compiled code runs: numba's DeNOC recursions and their compilation, where an
   exception raised from a signal handler ends in a ``SystemError``): every signal is noted
-  and :meth:`SignalLatch.check` raises at the next safe point, between integrator steps
+  and `SignalLatch.check` raises at the next safe point, between integrator steps
   (a third signal raises at once: the user insists);
 * ``"soft"`` (a results folder is being written): the first signal is noted and the write
   completes; a second one raises, and the folder is left as it was.
@@ -38,10 +38,10 @@ def exit_status(signum: int | None) -> int:
 
 
 class SignalLatch:
-    """Turns SIGINT and SIGTERM into :class:`KeyboardInterrupt`, or notes them while deferred.
+    """Turns SIGINT and SIGTERM into `KeyboardInterrupt`, or notes them while deferred.
 
     Attributes:
-        signum: The first signal received since :meth:`install`, or None.
+        signum: The first signal received since `install`, or None.
         pending: A noted signal has not raised yet.
     """
 
@@ -69,7 +69,7 @@ class SignalLatch:
         return True
 
     def uninstall(self) -> None:
-        """Put back the handlers found by :meth:`install`."""
+        """Put back the handlers found by `install`."""
         for signum, handler in self._previous.items():
             signal.signal(signum, signal.SIG_DFL if handler is None else handler)
         self._previous.clear()
@@ -95,13 +95,13 @@ class SignalLatch:
             self._mode = previous
 
     def check(self) -> None:
-        """Raise :class:`KeyboardInterrupt` if a noted signal has not raised yet."""
+        """Raise `KeyboardInterrupt` if a noted signal has not raised yet."""
         if self.pending:
             self.pending = False
             raise KeyboardInterrupt
 
     def checking(self, progress: Callable[[float], object]) -> Callable[[float], object]:
-        """``progress`` preceded by :meth:`check`: a safe point between integrator steps."""
+        """``progress`` preceded by `check`: a safe point between integrator steps."""
 
         def checked(fraction: float) -> object:
             self.check()
@@ -131,7 +131,7 @@ def fault_pause(phase: str) -> None:
     Fault tests use it to signal a command at a chosen moment: ``import`` (before the
     command's modules are imported), ``compute`` (after the first step or chunk), ``write``
     (the files are in the staging folder), ``swap`` (the new folder is in place, the
-    previous one not yet deleted); ``startup`` is in :mod:`gimwatch.__main__`.
+    previous one not yet deleted); ``startup`` is in `gimwatch.__main__`.
     """
     if os.environ.get("GIMWATCH_FAULT_PAUSE") != phase or phase in _paused:
         return

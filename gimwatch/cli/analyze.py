@@ -5,9 +5,17 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._batch import expand_specs
+from gimwatch.cli._format import (
+    add_base_arguments,
+    add_mjcf_arguments,
+    non_negative_int,
+    positive_int,
+    table,
+)
+from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
-from gimwatch.errors import InputError
+from gimwatch.errors import GimwatchError, InputError
 from gimwatch.metrics.analyze import analyze, choose_path
 from gimwatch.model.robots import DATA_NV_LIMIT
 from gimwatch.model.sampling import placeholder_note
@@ -38,13 +46,20 @@ CSV_COLUMNS = (
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("robot", help="chain:N, a URDF path, or an example-robot-data name")
+    parser.add_argument(
+        "robots",
+        nargs="+",
+        metavar="ROBOT",
+        help="chain:N, a URDF/MJCF path or a folder of them, or an example-robot-data name; "
+        "given several, a refused one is a row 'refused: <reason>' and the exit status 2",
+    )
     parser.add_argument(
         "--q",
         type=float,
         nargs="+",
         metavar="Q",
-        help="configuration: nq numbers, a continuous joint by its angle (rad); default: neutral",
+        help="configuration: nq numbers, a continuous joint by its angle (rad); for MJCF, "
+        "MuJoCo's qpos; default: neutral",
     )
     parser.add_argument(
         "--random",
@@ -53,7 +68,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="analyse K random configurations within the joint limits",
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
-    parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    add_base_arguments(parser)
+    add_mjcf_arguments(parser)
     add_output_arguments(parser, what="configurations")
     parser.add_argument(
         "--backend",
@@ -61,6 +77,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="auto",
         help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; fixed "
         f"base); auto: denoc above nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
+    )
+    # --explain (issue 25): the modes of λmin and λmax at each configuration, dense path only
+    parser.add_argument(
+        "--explain",
+        action="store_true",
+        help="also explain kappa: the joints and bodies of the lambda_min and lambda_max modes",
     )
     parser.add_argument(
         "--metrics",
@@ -70,18 +92,46 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Analyse and print."""
+    """Analyse and print: one robot as before, several as a batch with refusals kept."""
     if args.q is not None and args.random is not None:
         raise InputError("--q and --random", "used one at a time", "both")
     if args.random is not None and args.random > MAX_RANDOM:
         raise InputError("--random", f"at most {MAX_RANDOM}", args.random)
-    linear = choose_path(args.robot, floating=args.floating, backend=args.backend) == "denoc"
+    specs = expand_specs(args.robots)
+    if len(specs) == 1:
+        analysis = _analysis(specs[0], args)
+        _notes(analysis)
+        if args.explain:
+            return _print_explained(specs[0], analysis, args)
+        return _print_one(analysis, args)
+    if args.explain:
+        raise InputError("--explain", "used with one robot", f"{len(specs)} robots")
+    blocks: list[tuple[str, object, str]] = []
+    progress = ItemProgress("analyze", len(specs))
+    for spec in specs:
+        progress.start(spec)
+        try:
+            analysis = _analysis(spec, args)
+        except GimwatchError as exc:
+            blocks.append((spec, None, str(exc)))
+            continue
+        _notes(analysis)
+        blocks.append((spec, analysis, ""))
+    progress.close()
+    _print_batch(blocks, args)
+    return 2 if any(reason for _, _, reason in blocks) else 0
+
+
+def _analysis(spec: str, args: argparse.Namespace):
+    linear = choose_path(spec, floating=args.floating, backend=args.backend) == "denoc"
     if args.metrics is not None and not linear:
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
     if linear and args.floating:
         raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
-    analysis = analyze(
-        args.robot,
+    if args.explain and (linear or args.csv):
+        raise InputError("--explain", "used on the dense path, without --csv", True)
+    return analyze(
+        spec,
         args.q,
         random=args.random,
         seed=args.seed,
@@ -89,9 +139,13 @@ def run(args: argparse.Namespace) -> int:
         backend=args.backend,
         metrics=None if args.metrics is None else args.metrics.split(","),
         key="--q",
+        body=args.body,
+        armature=not args.no_armature,
     )
-    results = analysis.results
-    first = results[0]
+
+
+def _notes(analysis) -> None:
+    first = analysis.results[0]
     if analysis.placeholder_limits:
         print(f"gimwatch: note: {placeholder_note(analysis.placeholder_limits)}", file=sys.stderr)
     if analysis.path == "denoc" and analysis.chosen:
@@ -100,17 +154,36 @@ def run(args: argparse.Namespace) -> int:
             "DeNOC path (Pinocchio's Data would need GBs)",
             file=sys.stderr,
         )
-    base = "floating" if args.floating else "fixed"
-    records = [{"config": i, **r.to_dict()} for i, r in enumerate(results)]
+
+
+def _header(analysis) -> dict:
+    first = analysis.results[0]
+    base = "floating" if analysis.floating else "fixed"
+    header = {"robot": first.robot, "nv": first.nv, "base": base, "method": first.method}
+    if analysis.placeholder_limits:  # random draws replaced these joints' limits
+        header["placeholder_limits"] = list(analysis.placeholder_limits)
+    return header
+
+
+def _records(analysis) -> list[dict]:
+    return [{"config": i, **r.to_dict()} for i, r in enumerate(analysis.results)]
+
+
+def _print_one(analysis, args: argparse.Namespace) -> int:
+    records = _records(analysis)
     if args.json:
-        header = {"robot": first.robot, "nv": first.nv, "base": base, "method": first.method}
-        if analysis.placeholder_limits:  # random draws replaced these joints' limits
-            header["placeholder_limits"] = list(analysis.placeholder_limits)
-        print(json_text({**header, "configurations": records}))
+        print(json_text({**_header(analysis), "configurations": records}))
         return 0
     if args.csv:
         print(csv_text(records, CSV_COLUMNS))
         return 0
+    _print_table(analysis)
+    return 0
+
+
+def _print_table(analysis) -> None:
+    first, results = analysis.results[0], analysis.results
+    base = "floating" if analysis.floating else "fixed"
     print(f"{first.robot}: nv = {first.nv}, {base} base, method {first.method}")
     # the registry's names, as in --json and --csv
     headers = [
@@ -139,4 +212,65 @@ def run(args: argparse.Namespace) -> int:
         for i, r in enumerate(results)
     ]
     print(table(headers, rows))
+
+
+#: ``--csv`` columns of a batch: a refused robot is a row with its reason in ``refused``.
+BATCH_CSV_COLUMNS = (*CSV_COLUMNS, "refused")
+
+
+def _print_batch(blocks, args: argparse.Namespace) -> None:
+    if args.json:
+        robots = [
+            {**_header(a), "configurations": _records(a)}
+            if a is not None
+            else {"robot": spec, "status": "refused", "reason": reason}
+            for spec, a, reason in blocks
+        ]
+        print(json_text({"robots": robots}))
+        return
+    if args.csv:
+        rows = []
+        for spec, a, reason in blocks:
+            if a is None:
+                rows.append({"robot": spec, "refused": reason})
+            else:
+                rows.extend({**r, "refused": ""} for r in _records(a))
+        print(csv_text(rows, BATCH_CSV_COLUMNS))
+        return
+    for spec, a, reason in blocks:
+        if a is None:
+            print(f"{spec}: refused: {reason}")
+        else:
+            _print_table(a)
+        print()
+    refused = sum(1 for _, a, _ in blocks if a is None)
+    print(
+        f"{len(blocks) - refused}/{len(blocks)} analysed" + (f", {refused} refused" * bool(refused))
+    )
+
+
+def _print_explained(spec: str, analysis, args: argparse.Namespace) -> int:
+    """``--explain``: the analysis, and the modes of λmin and λmax at each configuration."""
+    from gimwatch.cli.explain import mode_lines
+    from gimwatch.explain.modes import gim_modes
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot(
+        spec,
+        floating=analysis.floating,
+        max_nv=DATA_NV_LIMIT,
+        body=args.body,
+        armature=not args.no_armature,
+    )
+    modes = [gim_modes(robot, r.q) for r in analysis.results]
+    if args.json:
+        records = [
+            {**r, "modes": m.to_dict()} for r, m in zip(_records(analysis), modes, strict=True)
+        ]
+        print(json_text({**_header(analysis), "configurations": records}))
+        return 0
+    _print_table(analysis)
+    for i, mode in enumerate(modes):
+        for line in mode_lines(mode):
+            print(f"config {i}: {line}")
     return 0

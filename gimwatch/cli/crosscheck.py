@@ -1,8 +1,10 @@
 """Cross-check DeNOC (numpy + yourdfpy) against Pinocchio: GIM, τ, q̈ and UDUᵀ pivots.
 
-ROBOT is chain:N, a URDF path, an example-robot-data name, or ``all`` (every
-example-robot-data robot; those that cannot be loaded are skipped with the reason on
-stderr). Exit status 1 when any robot is beyond the tolerance.
+ROBOT is chain:N, a URDF or MJCF path, a folder of them, an example-robot-data name, or
+``all`` (every example-robot-data robot; those that cannot be loaded are skipped with the
+reason on stderr). Given several robots, a refused one is a row ``refused: <reason>`` and the
+others are still compared. Exit status: 2 when a robot was refused, else 1 when any robot is
+beyond the tolerance or was not compared (nothing to compare: M ≡ 0), else 0.
 """
 
 from __future__ import annotations
@@ -10,7 +12,15 @@ from __future__ import annotations
 import argparse
 import sys
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._batch import expand_specs, load_each
+from gimwatch.cli._format import (
+    add_base_arguments,
+    add_mjcf_arguments,
+    non_negative_int,
+    positive_int,
+    table,
+)
+from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.crosscheck import (
     DEFAULT_TOLERANCE,
@@ -18,7 +28,7 @@ from gimwatch.crosscheck import (
     check_tolerance,
     crosscheck_robot,
 )
-from gimwatch.errors import RobotError
+from gimwatch.errors import GimwatchError
 from gimwatch.model.robots import example_robot_names, load_robot
 
 NAME = "crosscheck"
@@ -27,12 +37,15 @@ HELP = "compare DeNOC with Pinocchio (crba, rnea, aba, cholesky) at random state
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("robots", nargs="+", metavar="ROBOT", help="robot specs, or 'all'")
+    parser.add_argument(
+        "robots", nargs="+", metavar="ROBOT", help="robot specs or folders of them, or 'all'"
+    )
     parser.add_argument("--samples", type=positive_int, default=10, help="random states")
     parser.add_argument(
         "--seed", type=non_negative_int, default=0, help="seed of the random states"
     )
-    parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    add_base_arguments(parser)
+    add_mjcf_arguments(parser)
     parser.add_argument(
         "--tolerance",
         type=float,
@@ -48,18 +61,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_output_arguments(parser, what="robots")
 
 
-#: ``--csv`` columns, one row per robot (the fields of :class:`CrossCheckResult`).
+#: ``--csv`` columns, one row per robot (the fields of
+#: [`CrossCheckResult`][gimwatch.crosscheck.CrossCheckResult]).
 CSV_COLUMNS = tuple(CrossCheckResult.__dataclass_fields__)
 
 
-def _print(results: list[CrossCheckResult], args: argparse.Namespace) -> None:
-    records = [r.to_dict() for r in results]
+def _refusal_record(spec: str, reason: str) -> dict:
+    """A refused robot as a row: its spec, status ``refused`` and the reason in ``note``."""
+    record = dict.fromkeys(CSV_COLUMNS)
+    record.update(robot=spec, status="refused", note=reason, passed=False)
+    return record
+
+
+def _print(results: list, args: argparse.Namespace) -> None:
+    """``results`` holds CrossCheckResult records and refusal rows (dicts), in order."""
+    records = [r if isinstance(r, dict) else r.to_dict() for r in results]
     if args.json:
         print(json_text({"tolerance": args.tolerance, "robots": records}))
         return
     if args.csv:
         print(csv_text(records, CSV_COLUMNS))
         return
+    checked = [r for r in results if not isinstance(r, dict)]
     headers = ["robot", "base", "nv", "GIM", "diag", "tau", "qdd", "qdd bwd", "pivots"]
     fields = [
         "gim_rel_err",
@@ -69,61 +92,94 @@ def _print(results: list[CrossCheckResult], args: argparse.Namespace) -> None:
         "qdd_backward_err",
         "pivots_rel_err",
     ]
-    if any(r.mujoco_gim_rel_err is not None for r in results):
+    if any(r.mujoco_gim_rel_err is not None for r in checked):
         headers.append("M mujoco")
         fields.append("mujoco_gim_rel_err")
     headers.append("kappa")
     fields.append("kappa_max")
-    rows = [
-        [
-            r.robot + ("" if r.passed else "  FAIL"),
-            "floating" if r.floating else "fixed",
-            r.nv,
-            *("n/a" if getattr(r, f) is None else getattr(r, f) for f in fields),
-        ]
-        for r in results
-    ]
+    rows = []
+    for r in results:
+        if isinstance(r, dict):
+            rows.append([r["robot"], "refused", *[""] * (len(headers) - 2)])
+            continue
+        label = {"passed": "", "failed": "  FAIL", "not compared": "  NOT COMPARED"}[r.status]
+        rows.append(
+            [
+                r.robot + label,
+                "floating" if r.floating else "fixed",
+                r.nv,
+                *("n/a" if getattr(r, f) is None else getattr(r, f) for f in fields),
+            ]
+        )
     print(table(headers, rows))
     for r in results:
-        if r.note:
+        if isinstance(r, dict):
+            print(f"{r['robot']}: refused: {r['note']}")
+        elif r.note:
             print(f"{r.robot}: {r.note}")
-    failed = sum(not r.passed for r in results)
-    print(f"{len(results) - failed}/{len(results)} passed (tolerance {results[0].tolerance:g})")
+    counts = {s: sum(r.status == s for r in checked) for s in ("passed", "failed", "not compared")}
+    refused = len(results) - len(checked)
+    tolerance = checked[0].tolerance if checked else args.tolerance
+    extra = "".join(
+        f", {n} {what}"
+        for n, what in ((counts["not compared"], "not compared"), (refused, "refused"))
+        if n
+    )
+    print(f"{counts['passed']}/{len(results)} passed (tolerance {tolerance:g}){extra}")
+
+
+def _status(results: list) -> int:
+    if any(isinstance(r, dict) for r in results):
+        return 2
+    return 0 if all(r.status == "passed" for r in results) else 1
 
 
 def run(args: argparse.Namespace) -> int:
     """Cross-check each robot and print the worst errors."""
     check_tolerance(args.tolerance, "--tolerance")
     everything = "all" in args.robots
-    specs = list(example_robot_names()) if everything else args.robots
-    # Load every named robot first, so that bad input fails with one line before any work.
-    robots = [] if everything else [load_robot(spec, floating=args.floating) for spec in specs]
-    results: list[CrossCheckResult] = []
+    specs = list(example_robot_names()) if everything else expand_specs(args.robots)
+    mjcf = {"body": args.body, "armature": not args.no_armature}
+    if len(specs) == 1 and not everything:  # one robot: bad input is one error line
+        robot = load_robot(specs[0], floating=args.floating, **mjcf)
+        loaded = iter([(specs[0], robot, None)])
+    else:
+        loaded = load_each(specs, floating=args.floating, **mjcf)
+    results: list = []
+    progress = ItemProgress("crosscheck", len(specs)) if len(specs) > 1 else None
     try:
-        for i, spec in enumerate(specs, 1):
-            if len(specs) > 1:
-                print(f"crosscheck: [{i}/{len(specs)}] {spec}", file=sys.stderr)
-            if everything:
-                try:
-                    robot = load_robot(spec, floating=args.floating)
-                except RobotError as exc:
-                    print(f"crosscheck: skipped {spec}: {exc.problem}", file=sys.stderr)
-                    continue
-            else:
-                robot = robots[i - 1]
-            results.append(
-                crosscheck_robot(
-                    robot,
-                    samples=args.samples,
-                    seed=args.seed,
-                    tolerance=args.tolerance,
-                    peer=args.peer,
+        for spec, robot, error in loaded:
+            if progress is not None:
+                progress.start(spec)
+            if robot is None:
+                if everything:
+                    reason = getattr(error, "problem", str(error))
+                    print(f"crosscheck: skipped {spec}: {reason}", file=sys.stderr)
+                else:
+                    results.append(_refusal_record(spec, str(error)))
+                continue
+            try:
+                results.append(
+                    crosscheck_robot(
+                        robot,
+                        samples=args.samples,
+                        seed=args.seed,
+                        tolerance=args.tolerance,
+                        peer=args.peer,
+                    )
                 )
-            )
+            except GimwatchError as exc:
+                if len(specs) == 1:
+                    raise
+                results.append(_refusal_record(spec, str(exc)))
     except KeyboardInterrupt:
+        if progress is not None:
+            progress.close()
         if results:
             _print(results, args)
         raise
+    if progress is not None:
+        progress.close()
     if results:
         _print(results, args)
-    return 0 if all(r.passed for r in results) else 1
+    return _status(results)

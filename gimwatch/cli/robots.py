@@ -1,8 +1,10 @@
 """List the robots gimwatch can load by name: every example-robot-data robot, with nv.
 
 Each robot is loaded (a fraction of a second for all of them) to report its number of
-velocity coordinates nv with a fixed base. Robots with no joint when fixed (drones) are
-listed with a floating base; robots that cannot be loaded are listed with the reason.
+velocity coordinates nv with the base every command gives it by default: example-robot-data's
+(a free-flyer for legged robots, humanoids and drones, as ``example_robot_data.load`` builds
+them; ``--fixed`` fixes it), fixed for the others. Robots with no joint when fixed are listed
+with a floating base; robots that cannot be loaded are listed with the reason.
 ``chain:N`` (the paper's rod chain) and URDF paths are accepted wherever a ROBOT is.
 """
 
@@ -35,7 +37,7 @@ def robot_rows() -> list[dict]:
         row = {"name": name, "nv": None, "base": "", "source": "", "problem": ""}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # suspicious inertias are analyze's business
-            for floating in (False, True):
+            for floating in (None, True):  # the default base; a free-flyer if it has no joint
                 try:
                     robot = load_robot(name, floating=floating)
                 except GimwatchError as exc:
@@ -43,9 +45,9 @@ def robot_rows() -> list[dict]:
                     continue
                 row.update(
                     nv=robot.nv,
-                    base="floating" if floating else "fixed",
+                    base="floating" if robot.floating else "fixed",
                     source=robot.source,
-                    problem="" if not floating else "no joint with a fixed base",
+                    problem="" if floating is None else "no joint with a fixed base",
                 )
                 break
         rows.append(row)

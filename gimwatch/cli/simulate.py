@@ -11,6 +11,7 @@ from gimwatch.cli._progress import ProgressBar
 from gimwatch.cli._signals import LATCH, fault_pause
 from gimwatch.output.folders import Reservation
 from gimwatch.simulation.backends import BACKENDS
+from gimwatch.simulation.bundled_scenes import bundled_scenes
 from gimwatch.simulation.results_folder import summarize, write_simulation
 from gimwatch.simulation.scene import load_scene
 from gimwatch.simulation.simulate import Simulation
@@ -21,7 +22,11 @@ HELP = "simulate a scene (TOML) and watch the conditioning of M(q)"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("scene", help="scene file (TOML); the format: docs/guide/simulate.md")
+    parser.add_argument(
+        "scene",
+        help=f"scene file (TOML), or a bundled scene named without a path "
+        f"({', '.join(bundled_scenes())}); the format: docs/scenes.md",
+    )
     parser.add_argument(
         "-o", "--output", help="results folder (default: results/<scene name> next to the cwd)"
     )

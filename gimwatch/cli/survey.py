@@ -9,7 +9,8 @@ import sys
 import time
 from pathlib import Path
 
-from gimwatch.cli._format import non_negative_int, positive_int, table
+from gimwatch.cli._batch import expand_specs
+from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
 from gimwatch.cli._signals import LATCH, fault_pause
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.output.folders import Reservation
@@ -28,7 +29,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "robots",
         nargs="+",
         metavar="ROBOT",
-        help="chain:N, a URDF path, an example-robot-data name, or 'all' (every such robot)",
+        help="chain:N, a URDF/MJCF path or a folder of them, an example-robot-data name, or "
+        "'all' (every such robot); a refused robot is reported and the exit status is 2",
     )
     parser.add_argument(
         "--samples", type=positive_int, default=200, metavar="K", help="random configurations"
@@ -36,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seed", type=non_negative_int, default=0, help="seed of the random configurations"
     )
-    parser.add_argument("--floating", action="store_true", help="add a free-flyer base")
+    add_base_arguments(parser)
     parser.add_argument(
         "--scheduler",
         metavar="ADDRESS",
@@ -155,8 +157,11 @@ def run(args: argparse.Namespace) -> int:
         headers += ["run pearson", "run ad err"]
     if rows:
         print(table(headers, rows))
+    named = set(expand_specs(args.robots)) - {"all"}
+    refused = [f for f in result.failures if f.stage == "load" and f.spec in named]
     for failure in result.failures:
-        print(f"not surveyed: {failure.spec}: {failure.reason}")
+        what = "refused" if failure in refused else "not surveyed"
+        print(f"{what}: {failure.spec}: {failure.reason}")
     print(
         f"wrote {report} ({len(result.robots)} robots, {len(result.failures)} failed, "
         f"{wall_time_s:.1f} s)",
@@ -165,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
     if result.interrupted or LATCH.signum is not None:
         print("gimwatch: interrupted; partial results written", file=sys.stderr)
         return LATCH.exit_status
-    return 0
+    return 2 if refused else 0  # a robot named on the command line was bad input
 
 
 def _survey(args: argparse.Namespace):
@@ -191,7 +196,7 @@ def _survey(args: argparse.Namespace):
             bar.update(finished - bar.n)
 
         result = run_survey(
-            args.robots,
+            expand_specs(args.robots),
             samples=args.samples,
             seed=args.seed,
             floating=args.floating,

@@ -6,14 +6,14 @@ matrices M̃ (Eqs. 11–13). This package implements them, Saha's recursive inve
 and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can check each other
 (``gimwatch crosscheck``). It never imports pinocchio.
 
-* :class:`DenocModel` — any URDF tree, fixed or floating base, in Pinocchio's coordinate
-  layout; the recursions batched per tree depth in NumPy (:mod:`.recursions`).
-* :class:`LeanModel` — the O(n) operations (diag M, M·x, M⁻¹·y, forward and inverse
-  dynamics) as one compiled call each with preallocated buffers, fixed and floating bases,
-  in Pinocchio's coordinate order (:mod:`.fused`); ``DenocModel.lean()`` builds it.
-* :class:`LinearTimeModel` — fixed-base trees, the same recursions compiled with numba
-  (:mod:`.compiled`): O(n) time and memory, for chains of 10^4–10^5 links, with the
-  matrix-free condition number :func:`extreme_eigenvalues`.
+* [`DenocModel`][gimwatch.denoc.DenocModel] — any URDF tree, fixed or floating base, in Pinocchio's
+  coordinate layout; the recursions batched per tree depth in NumPy (`.recursions`).
+* [`LeanModel`][gimwatch.denoc.LeanModel] — the O(n) operations (diag M, M·x, M⁻¹·y, forward and
+  inverse dynamics) as one compiled call each with preallocated buffers, fixed and floating bases,
+  in Pinocchio's coordinate order (`.fused`); ``DenocModel.lean()`` builds it.
+* [`LinearTimeModel`][gimwatch.denoc.LinearTimeModel] — fixed-base trees, one angle per body, on the
+  same compiled kernels (`.fused`): O(n) time and memory, for chains of 10^4–10^5 links, with the
+  matrix-free condition number [`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues].
 """
 
 from gimwatch.denoc.chain import chain_body_tree

@@ -1,8 +1,10 @@
-"""The :class:`~gimwatch.denoc.tree.BodyTree` of a generated rod chain, without URDF text.
+"""The [`BodyTree`][gimwatch.denoc.BodyTree] of a generated rod chain, without URDF text.
 
 Reading a 10^5-link URDF through an XML parser costs more than every recursion on it; the
-chain's bodies follow directly from its :class:`~gimwatch.model.chains.ChainSpec`, with the same
-geometry as :func:`gimwatch.model.chains.generate_chain_urdf` (tests compare the two).
+chain's bodies follow directly from its [`ChainSpec`][gimwatch.model.chains.ChainSpec], with the
+same geometry as
+[`generate_chain_urdf`][gimwatch.model.chains.generate_chain_urdf] (tests
+compare the two).
 """
 
 from __future__ import annotations

@@ -1,11 +1,13 @@
 """The DeNOC recursions fused into one compiled call each, fixed or floating base, no allocation.
 
-:mod:`.compiled` keeps one kernel per recursion (kinematics, body mass matrices, factor,
-solve), each allocating its outputs, and leaves the floating base to the NumPy recursions of
-:mod:`.recursions`. Here every public operation — diag M(q), M·x, M⁻¹·y, forward and inverse
-dynamics — is ONE compiled call that reads q, v, τ in Pinocchio's coordinate order, writes
-into caller-owned buffers and returns, so that a Python caller pays one dispatch per
-operation and nothing else (:class:`gimwatch.denoc.lean.LeanModel` owns the buffers).
+DeNOC's one compiled implementation (numba); `.recursions` is the NumPy reference,
+written equation by equation. Every public operation — diag M(q), M·x, M⁻¹·y, forward and
+inverse dynamics — is ONE compiled call that reads q, v, τ in the caller's coordinate order
+(given per body by ``index``), writes into caller-owned buffers and returns, so that a Python
+caller pays one dispatch per operation and nothing else. Two wrappers own the buffers:
+[`gimwatch.denoc.lean.LeanModel`][gimwatch.denoc.LeanModel] (Pinocchio's coordinates, fixed or
+floating base) and [`gimwatch.denoc.linear.LinearTimeModel`][gimwatch.denoc.LinearTimeModel] (one
+angle per body, fixed base, for 10^4–10^5 links, with a state object per configuration).
 
 Arrays cover the whole tree, root included (body 0). With a fixed base body 0 is the world:
 its acceleration is ``[0; −g]`` (gravity as an upward acceleration of the base) and nothing is
@@ -13,7 +15,7 @@ passed to it. With a floating base body 0 moves on Pinocchio's free-flyer: q = (
 qy, qz, qw), v = (local linear, local angular), and its six columns are
 ``P = [[0, R], [R, 0]]`` (local ``[v; ω]`` to the world twist ``[ω; v_O]``).
 
-Packed inputs (built once by :class:`~gimwatch.denoc.lean.LeanModel`):
+Packed inputs (built once by [`LeanModel`][gimwatch.denoc.LeanModel]):
 
 * ``index`` (N, 5) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic),
   index of the body's first q entry, index of its v entry (for the root: of the first of six),
@@ -26,21 +28,23 @@ e_i, centre-of-mass offset d_i, angular velocity ω_i; ``six`` (N, 5, 6) = U_i, 
 c_i, bias wrench b_i, twist rate, wrench; ``block`` (N, 2, 6, 6) = M_i, composite /
 articulated M̃_i; ``scal`` (N, 2) = pivot D_i, u_i; ``root`` (7, 6) = the free-flyer's 6×6
 UDUᵀ factor (rows 0–5 U, row 6 D); ``comp`` (N, 10) = the composite mass, first moment and
-rotational inertia the diagonal needs. Conventions and equations as in :mod:`.compiled`
+rotational inertia the diagonal needs. Conventions and equations as in `.compiled`
 (Shah & Saha 2013, Eqs. 11–13; Saha's DeNOC; Featherstone's articulated-body algorithm).
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from gimwatch.denoc.compiled import add_shift_congruence, cross3
+from gimwatch.jit import njit
 
 __all__ = [
+    "COM_OFFSET_ROW",
+    "ORIGIN_ROW",
     "configure",
     "factor_shifted",
     "forward_dynamics",
+    "forward_dynamics_factored",
     "gim_diagonal",
     "gim_product",
     "gim_solve",
@@ -49,7 +53,56 @@ __all__ = [
 ]
 
 _ORIGIN, _REACH, _AXIS, _COM, _OMEGA = 0, 1, 2, 3, 4
+#: Rows of the ``vec`` buffer that callers read after the kinematics: origins O_i and the
+#: centre-of-mass offsets d_i = c_i − O_i, both in world axes (m).
+ORIGIN_ROW, COM_OFFSET_ROW = _ORIGIN, _COM
 _U, _C, _B, _RATE, _WRENCH = 0, 1, 2, 3, 4
+
+
+@njit(cache=True, inline="always")
+def cross3(a, b, out):
+    """The cross product a × b of 3-vectors, written into out."""
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True)
+def add_shift_congruence(target, x, r, scratch):
+    """Target += A_ijᵀ X A_ij, with A_ij = [[1, 0], [-r̃, 1]] (r = O_i - O_j); X symmetric.
+
+    Blockwise, with X = [[a, b], [bᵀ, d]]: the top-right block becomes b + r̃ d, the top-left
+    a + r̃ bᵀ - (b + r̃ d) r̃ and the bottom-left its transpose; d is unchanged.
+    """
+    rx, ry, rz = r[0], r[1], r[2]
+    top_right = scratch
+    for c in range(3):
+        d0, d1, d2 = x[3, 3 + c], x[4, 3 + c], x[5, 3 + c]
+        top_right[0, c] = x[0, 3 + c] + (-rz * d1 + ry * d2)
+        top_right[1, c] = x[1, 3 + c] + (rz * d0 - rx * d2)
+        top_right[2, c] = x[2, 3 + c] + (-ry * d0 + rx * d1)
+    for a in range(3):
+        # row a of r̃ bᵀ, with bᵀ = x[3:, :3]
+        for c in range(3):
+            b0, b1, b2 = x[3, c], x[4, c], x[5, c]
+            if a == 0:
+                rb = -rz * b1 + ry * b2
+            elif a == 1:
+                rb = rz * b0 - rx * b2
+            else:
+                rb = -ry * b0 + rx * b1
+            # (top_right r̃)[a, c]
+            t0, t1, t2 = top_right[a, 0], top_right[a, 1], top_right[a, 2]
+            if c == 0:
+                tr = t1 * rz - t2 * ry
+            elif c == 1:
+                tr = -t0 * rz + t2 * rx
+            else:
+                tr = t0 * ry - t1 * rx
+            target[a, c] += x[a, c] + rb - tr
+            target[a, 3 + c] += top_right[a, c]
+            target[3 + c, a] += top_right[a, c]
+            target[3 + a, 3 + c] += x[3 + a, 3 + c]
 
 
 @njit(cache=True)
@@ -234,7 +287,7 @@ def _udut6(matrix, root):
 
 @njit(cache=True)
 def _solve6(root, rhs, out):
-    """Out = (U D Uᵀ)⁻¹ rhs with the factor of :func:`_udut6`."""
+    """Out = (U D Uᵀ)⁻¹ rhs with the factor of `_udut6`."""
     z = np.empty(6)
     for i in range(5, -1, -1):
         acc = rhs[i]
@@ -584,15 +637,15 @@ def configure(q, index, geometry, floating, rot, vec, block, six, scal, root):
 
 @njit(cache=True)
 def kinematics(q, index, geometry, floating, rot, vec, block):
-    """Poses and body mass matrices at q: all that :func:`gim_product` reads."""
+    """Poses and body mass matrices at q: all that `gim_product` reads."""
     _kinematics(q, index, geometry, floating, rot, vec, block)
 
 
 @njit(cache=True)
 def factor_shifted(shift, index, floating, rot, vec, block, six, scal, root):
-    """The articulated factor of M(q) − shift·1 after :func:`kinematics`, for :func:`gim_solve`.
+    """The articulated factor of M(q) − shift·1 after `kinematics`, for `gim_solve`.
 
-    :func:`gim_solve` then gives (M − shift·1)⁻¹ y. Returns whether every pivot is positive,
+    `gim_solve` then gives (M − shift·1)⁻¹ y. Returns whether every pivot is positive,
     i.e. (Sylvester's law of inertia) whether shift < λmin(M).
     """
     return _factor(index, floating, rot, vec, block, six, scal, root, shift)
@@ -620,6 +673,15 @@ def forward_dynamics(
     moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
     _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out)
     return ok
+
+
+@njit(cache=True)
+def forward_dynamics_factored(
+    v, tau, gravity, index, geometry, floating, rot, vec, block, six, scal, root, out
+):
+    """`forward_dynamics` at the q of the last `configure` (factor kept)."""
+    moving = _velocity_terms(v, index, geometry, floating, rot, vec, six)
+    _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out)
 
 
 @njit(cache=True)

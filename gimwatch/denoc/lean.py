@@ -1,10 +1,10 @@
 """`LeanModel`: DeNOC's O(n) operations at one compiled call each, with preallocated buffers.
 
-:class:`~gimwatch.denoc.model.DenocModel` checks every argument and builds a fresh state per
+[`DenocModel`][gimwatch.denoc.DenocModel] checks every argument and builds a fresh state per
 call; that is right for a cross-check, but in a simulation loop or a watch sampled every
 step the checks and the allocations cost more than the recursions (22 µs for one δ sample
-of a 20-link chain, 4× a Pinocchio ``aba`` call). A :class:`LeanModel` packs the tree once
-and keeps the workspace; each method below is exactly one call into :mod:`.fused` and
+of a 20-link chain, 4× a Pinocchio ``aba`` call). A [`LeanModel`][gimwatch.denoc.LeanModel] packs
+the tree once and keeps the workspace; each method below is exactly one call into `.fused` and
 nothing else, for fixed and floating bases alike, in Pinocchio's coordinate order.
 
 Arguments are NOT checked (shapes, finiteness): the caller owns that, as with Pinocchio's
@@ -28,7 +28,8 @@ _ZERO_GRAVITY = np.zeros(3)
 class LeanModel:
     """The compiled DeNOC recursions of one body tree with their buffers.
 
-    Build it with :meth:`gimwatch.denoc.DenocModel.lean` (which knows the coordinate order).
+    Build it with [`lean`][gimwatch.denoc.DenocModel.lean] (which knows
+    the coordinate order).
 
     Args:
         tree: The body tree.
@@ -102,7 +103,7 @@ class LeanModel:
         )
 
     def configure(self, q: np.ndarray) -> None:
-        """Set the configuration of :meth:`gim_product` and :meth:`gim_solve` (O(n) factor).
+        """Set the configuration of `gim_product` and `gim_solve` (O(n) factor).
 
         Raises:
             ConditioningError: M(q) is singular (a pivot is not positive).
@@ -124,9 +125,9 @@ class LeanModel:
             raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
 
     def compiled_operator_arguments(self) -> tuple:
-        """The buffers the compiled products read after :meth:`configure`.
+        """The buffers the compiled products read after `configure`.
 
-        :func:`.fused.gim_product` and :func:`.fused.gim_solve` take them after x and before
+        `.fused.gim_product` and `.fused.gim_solve` take them after x and before
         out: (index, floating, rot, vec, block, six, scal, root). For compiled callers (the
         κ tracker's Krylov loop) that call the products directly.
         """
@@ -144,16 +145,21 @@ class LeanModel:
     def compiled_model_arguments(self) -> tuple:
         """(index, geometry, floating): the packed tree every compiled recursion reads.
 
-        With :meth:`new_workspace`, for compiled callers that keep their own configured
-        state (the κ tracker factors M − σ·1 in its own buffers, leaving this model's alone).
+        With [`new_workspace`][gimwatch.denoc.LeanModel.new_workspace], for compiled callers that
+        keep their own configured state (the κ tracker factors M − σ·1 in its own buffers, leaving
+        this model's alone).
         """
         return self._index, self._geometry, self.floating
 
-    def new_workspace(self) -> tuple:
-        """Fresh buffers (rot, vec, block, six, scal, root) shaped like this model's own."""
+    def new_workspace(self, *, zeroed: bool = True) -> tuple:
+        """Fresh buffers (rot, vec, block, six, scal, root) shaped like this model's own.
+
+        ``zeroed=False`` leaves them uninitialised, for callers whose first call writes
+        every entry later read (the kinematics, then the factor).
+        """
+        make = np.zeros_like if zeroed else np.empty_like
         return tuple(
-            np.zeros_like(a)
-            for a in (self._rot, self._vec, self._block, self._six, self._scal, self._root)
+            make(a) for a in (self._rot, self._vec, self._block, self._six, self._scal, self._root)
         )
 
     def gim_product(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:

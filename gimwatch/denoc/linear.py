@@ -1,9 +1,10 @@
-"""O(n) dynamics of fixed-base trees without forming M: the compiled DeNOC recursions.
+"""O(n) dynamics of fixed-base trees without forming M, one angle per body, on DeNOC's kernels.
 
-:class:`LinearTimeModel` wraps a fixed-base :class:`~gimwatch.denoc.tree.BodyTree`;
-:meth:`LinearTimeModel.at` gives the :class:`ConfigurationState` at one configuration with
-diag M, M·x, M⁻¹·x, the UDUᵀ pivots, inverse and forward dynamics, each O(n) in time and
-memory. :func:`extreme_eigenvalues` turns M·x and M⁻¹·x into κ₂ by Lanczos.
+[`LinearTimeModel`][gimwatch.denoc.LinearTimeModel] wraps a fixed-base
+[`BodyTree`][gimwatch.denoc.BodyTree]; [`LinearTimeModel.at`][gimwatch.denoc.LinearTimeModel.at]
+gives the [`ConfigurationState`][gimwatch.denoc.ConfigurationState] at one configuration with diag
+M, M·x, M⁻¹·x, the UDUᵀ pivots, inverse and forward dynamics, each O(n) in time and memory.
+[`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues] turns M·x and M⁻¹·x into κ₂ by Lanczos.
 
 Coordinates are the tree's body order (parents first), one per body: an angle for revolute
 and continuous joints, a displacement for prismatic ones. Pinocchio's Data for an n-joint
@@ -12,27 +13,30 @@ model needs memory growing as n³, and the dense GIM n²; nothing here grows fas
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from functools import cached_property
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg
 
-from gimwatch.denoc import compiled
+from gimwatch.denoc import fused
+from gimwatch.denoc.lean import LeanModel
 from gimwatch.denoc.tree import BodyTree
 from gimwatch.errors import ConditioningError, InputError
 
 __all__ = ["ConfigurationState", "LinearTimeModel", "MatrixFreeKappa", "extreme_eigenvalues"]
 
-_NO_GRAVITY = np.zeros(3)
-_PRISMATIC = 3
+_REVOLUTE, _CONTINUOUS = 1, 2
 
 
 class LinearTimeModel:
     """O(n) dynamics of a fixed-base tree of 1-DoF joints.
 
-    Example:
+    The recursions are DeNOC's compiled kernels (`.fused`, the same that serve
+    [`LeanModel`][gimwatch.denoc.LeanModel]); this class gives them one coordinate per body,
+    an angle for revolute and continuous joints, and a state object per configuration.
+
+    Examples:
         >>> from gimwatch.model.chains import chain_spec
         >>> from gimwatch.denoc import LinearTimeModel, chain_body_tree
         >>> model = LinearTimeModel(chain_body_tree(chain_spec(4)))
@@ -49,15 +53,12 @@ class LinearTimeModel:
                 hint="use DenocModel for floating bases",
             )
         self.tree = tree
-        # The compiled kernels leave out the fixed root (body 0): parent -1 means the root.
-        self._parent = np.ascontiguousarray(tree.parent[1:] - 1, dtype=np.int64)
-        self._joint_type = np.ascontiguousarray(tree.kind[1:] == _PRISMATIC, dtype=np.int64)
-        self._axis = np.ascontiguousarray(tree.axis[1:])
-        self._rotation = np.ascontiguousarray(tree.placement_rotation[1:])
-        self._translation = np.ascontiguousarray(tree.placement_translation[1:])
-        self._mass = np.ascontiguousarray(tree.mass[1:])
-        self._com = np.ascontiguousarray(tree.com[1:])
-        self._inertia = np.ascontiguousarray(tree.inertia[1:])
+        # One coordinate per moving body, in body order: q[i - 1] and v[i - 1] for body i.
+        # Continuous joints take an angle here, so the kernels read them as revolute.
+        as_angles = replace(tree, kind=np.where(tree.kind == _CONTINUOUS, _REVOLUTE, tree.kind))
+        index = np.arange(-1, tree.size - 1)
+        index[0] = 0
+        self.kernels = LeanModel(as_angles, index, index, tree.size - 1, tree.size - 1)
 
     @property
     def nv(self) -> int:
@@ -80,96 +81,128 @@ class LinearTimeModel:
 
 
 class ConfigurationState:
-    """Kinematics and body mass matrices at one q, and the operators built on them."""
+    """Kinematics and body mass matrices at one q, and the operators built on them.
+
+    Each state owns its workspace (O(n) buffers), so states at several configurations can
+    be used side by side.
+    """
 
     def __init__(self, model: LinearTimeModel, q: np.ndarray) -> None:
         self.model = model
-        self.q = q
-        m = model
-        self.rotation, self.origin, self.reach, self.axis_world = compiled.kinematics(
-            q, m._parent, m._joint_type, m._axis, m._rotation, m._translation
+        self.q = np.ascontiguousarray(q, dtype=float)
+        self._index, self._geometry, _ = model.kernels.compiled_model_arguments()
+        # Every entry the kernels read is written first (checked with NaN-filled buffers),
+        # so the O(n) workspace is not zeroed: at 10^4 links that is most of a state's cost.
+        self._rot, self._vec, self._block, self._six, self._scal, self._root = (
+            model.kernels.new_workspace(zeroed=False)
         )
-        self.body_mass, self.com_offset = compiled.body_mass_matrices(
-            self.rotation, m._mass, m._com, m._inertia
+        fused.kinematics(
+            self.q, self._index, self._geometry, False, self._rot, self._vec, self._block
         )
+        self._factored = False
 
     def diagonal(self) -> np.ndarray:
         """Diag M(q) = p_iᵀ M̃_i p_i (Shah & Saha 2013, Eqs. 11–12), O(n)."""
-        m = self.model
-        return compiled.composite_diagonal(
-            m._parent, m._joint_type, self.reach, self.axis_world, self.body_mass
+        out = np.empty(self.model.nv)
+        composite = np.empty((self.model.tree.size, 10))  # written before it is read
+        # gim_diagonal recomputes the poses at self.q: the same values, in the same buffers
+        fused.gim_diagonal(
+            self.q, self._index, self._geometry, False, self._rot, self._vec, composite, out
         )
+        return out
 
     def inverse_dynamics(
         self, v: npt.ArrayLike, a: npt.ArrayLike, *, gravity: npt.ArrayLike = (0.0, 0.0, -9.81)
     ) -> np.ndarray:
         """τ = M(q) a + C(q, v) v - g(q), O(n) Newton–Euler about the joint origins."""
-        m = self.model
-        return compiled.inverse_dynamics(
-            m._parent,
-            m._joint_type,
-            self.reach,
-            self.axis_world,
-            self.com_offset,
-            self.rotation,
-            m._mass,
-            m._inertia,
-            np.asarray(v, dtype=float),
-            np.asarray(a, dtype=float),
-            np.asarray(gravity, dtype=float),
+        out = np.empty(self.model.nv)
+        # Kinematics recomputed in place (same q, same values); the factor is left alone.
+        fused.inverse_dynamics(
+            self.q,
+            np.ascontiguousarray(v, dtype=float),
+            np.ascontiguousarray(a, dtype=float),
+            np.ascontiguousarray(gravity, dtype=float),
+            self._index,
+            self._geometry,
+            False,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            out,
         )
+        return out
 
     def matvec(self, x: npt.ArrayLike) -> np.ndarray:
-        """M(q) x: inverse dynamics at rest without gravity, O(n)."""
-        return self.inverse_dynamics(np.zeros(self.model.nv), x, gravity=_NO_GRAVITY)
-
-    @cached_property
-    def _factor(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        m = self.model
-        return compiled.articulated_factor(
-            m._parent, m._joint_type, self.reach, self.axis_world, self.body_mass
+        """M(q) x: Newton–Euler from rest without gravity, O(n)."""
+        out = np.empty(self.model.nv)
+        fused.gim_product(
+            np.ascontiguousarray(x, dtype=float),
+            self._index,
+            False,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            out,
         )
+        return out
+
+    @property
+    def centres_of_mass(self) -> np.ndarray:
+        """World positions of the moving bodies' centres of mass (nv, 3), m."""
+        return self._vec[1:, fused.ORIGIN_ROW] + self._vec[1:, fused.COM_OFFSET_ROW]
+
+    def _workspace(self) -> tuple:
+        return self._rot, self._vec, self._block, self._six, self._scal, self._root
+
+    def _factor(self) -> None:
+        """The articulated-body factor (UDUᵀ from the tips), computed once per state."""
+        if not self._factored:
+            fused.factor_shifted(0.0, self._index, False, *self._workspace())
+            self._factored = True
 
     def pivots(self) -> np.ndarray:
         """The UDUᵀ pivots D_i (elimination from the tips; the backward pivots), O(n)."""
-        return self._factor[1].copy()
+        self._factor()
+        return self._scal[1:, 0].copy()
 
     def solve(self, tau: npt.ArrayLike) -> np.ndarray:
         """M(q)⁻¹ τ by the articulated-body recursion, O(n); the factor is cached."""
-        zeros = np.zeros(self.model.nv)
-        return self._articulated(zeros, tau, _NO_GRAVITY)
+        self._require_positive_pivots()
+        out = np.empty(self.model.nv)
+        fused.gim_solve(
+            np.ascontiguousarray(tau, dtype=float), self._index, False, *self._workspace(), out
+        )
+        return out
 
-    def _articulated(self, v: np.ndarray, tau: npt.ArrayLike, gravity: np.ndarray) -> np.ndarray:
-        m = self.model
-        u_vectors, pivots, articulated = self._factor
+    def _require_positive_pivots(self) -> None:
+        self._factor()
+        pivots = self._scal[1:, 0]
         if not np.all(pivots > 0):
             k = int(np.flatnonzero(~(pivots > 0))[-1])
             raise ConditioningError(
-                f"M(q) is singular: the pivot of {m.joint_names[k]} is {pivots[k]!r} "
+                f"M(q) is singular: the pivot of {self.model.joint_names[k]} is {pivots[k]!r} "
                 "(a joint that moves no mass?)"
             )
-        return compiled.articulated_solve(
-            m._parent,
-            m._joint_type,
-            self.reach,
-            self.axis_world,
-            self.com_offset,
-            self.rotation,
-            m._mass,
-            m._inertia,
-            u_vectors,
-            pivots,
-            articulated,
-            np.asarray(v, dtype=float),
-            np.asarray(tau, dtype=float),
-            np.asarray(gravity, dtype=float),
-        )
 
     def forward_dynamics(
         self, v: npt.ArrayLike, tau: npt.ArrayLike, *, gravity: npt.ArrayLike = (0.0, 0.0, -9.81)
     ) -> np.ndarray:
-        """q̈ = M⁻¹ (τ - C v + g) by the articulated-body algorithm, O(n)."""
-        return self._articulated(np.asarray(v, dtype=float), tau, np.asarray(gravity, dtype=float))
+        """q̈ = M⁻¹ (τ - C v + g) by the articulated-body algorithm, O(n); the factor is cached."""
+        self._require_positive_pivots()
+        out = np.empty(self.model.nv)
+        fused.forward_dynamics_factored(
+            np.ascontiguousarray(v, dtype=float),
+            np.ascontiguousarray(tau, dtype=float),
+            np.ascontiguousarray(gravity, dtype=float),
+            self._index,
+            self._geometry,
+            False,
+            *self._workspace(),
+            out,
+        )
+        return out
 
     def dense(self) -> np.ndarray:
         """The dense M(q), one column per M·e_k: O(n²) work — for checks on small n."""
@@ -183,9 +216,9 @@ class MatrixFreeKappa:
     """κ₂ of M(q) from Lanczos on x ↦ M x and x ↦ M⁻¹ x (M never formed).
 
     The one record of every matrix-free κ in gimwatch: DeNOC's plain Lanczos
-    (:func:`extreme_eigenvalues`) and ARPACK on Pinocchio's RNEA/ABA
-    (:func:`gimwatch.metrics.matrix_free.kappa_matrix_free`). Ritz values approach the
-    extreme eigenvalues from inside the spectrum, so ``lambda_max`` and ``1 / lambda_min``
+    ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]) and ARPACK on Pinocchio's RNEA/ABA
+    ([`kappa_matrix_free`][gimwatch.metrics.matrix_free.kappa_matrix_free]). Ritz values approach
+    the extreme eigenvalues from inside the spectrum, so ``lambda_max`` and ``1 / lambda_min``
     are lower bounds and ``kappa`` a lower bound of κ₂ that converges to it.
 
     Attributes:

@@ -39,14 +39,14 @@ def _vector(name: str, value: npt.ArrayLike, size: int) -> np.ndarray:
 class DenocModel:
     """A robot's body tree and the index maps between its coordinates and DeNOC's.
 
-    Build it with :meth:`from_urdf` (or :meth:`from_chain`). Internally bodies are numbered
+    Build it with `from_urdf` (or `from_chain`). Internally bodies are numbered
     parents-first; the maps below translate to and from the public (``joint_names``) order.
 
     The O(n) operations run compiled recursions: the diagonal and inverse and forward
-    dynamics those of :meth:`lean` (fixed and floating bases), the pivots, M·x, M⁻¹·x and the
-    energy those of :class:`~.linear.LinearTimeModel` (fixed base); the dense GIM, the
-    composite mass matrices and floating-base pivots use the per-depth NumPy recursions of
-    :mod:`.recursions`.
+    dynamics those of [`lean`][gimwatch.denoc.DenocModel.lean] (fixed and floating bases), the
+    pivots, M·x, M⁻¹·x and the energy those of [`LinearTimeModel`][gimwatch.denoc.LinearTimeModel]
+    (fixed base); the dense GIM, the composite mass matrices and floating-base pivots use the
+    per-depth NumPy recursions of `.recursions`.
     """
 
     def __init__(self, tree: BodyTree, joint_order: Sequence[str] | None = None) -> None:
@@ -125,7 +125,7 @@ class DenocModel:
         """The same recursions at one compiled call per operation, buffers preallocated.
 
         Fixed or floating base, Pinocchio's coordinate order, no argument checks (see
-        :class:`~gimwatch.denoc.lean.LeanModel`). Made on first use and kept.
+        [`LeanModel`][gimwatch.denoc.LeanModel]). Made on first use and kept.
         """
         if not hasattr(self, "_lean"):
             q_index = self._q_index.copy()
@@ -140,8 +140,9 @@ class DenocModel:
     def state(self, q: npt.ArrayLike) -> ConfigurationState:
         """The compiled model's state at ``q`` (fixed base only), for repeated O(n) products.
 
-        Its vectors are in internal (body) order: use :meth:`to_internal` and
-        :meth:`to_public` to translate.
+        Its vectors are in internal (body) order: use
+        [`to_internal`][gimwatch.denoc.DenocModel.to_internal] and
+        [`to_public`][gimwatch.denoc.DenocModel.to_public] to translate.
         """
         if self.linear is None:
             raise InputError("the model", "fixed-base for the O(n) state", "a floating base")
@@ -169,7 +170,7 @@ class DenocModel:
         state = self.state(q)
         velocity = self.to_internal("v", v)
         kinetic = 0.5 * float(velocity @ state.matvec(velocity))
-        centres = state.origin + state.com_offset
+        centres = state.centres_of_mass
         potential = -float(self.tree.mass[1:] @ (centres @ _vector("gravity", gravity, 3)))
         return kinetic, potential
 

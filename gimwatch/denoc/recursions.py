@@ -1,4 +1,4 @@
-"""The DeNOC recursions on a :class:`~gimwatch.denoc.tree.BodyTree` (internal coordinate order).
+"""The DeNOC recursions on a [`BodyTree`][gimwatch.denoc.BodyTree] (internal coordinate order).
 
 Notation of Shah & Saha (2013), Sec. 4, and Saha's DeNOC: body i has the twist
 ``t_i = [ω_i; v_i]`` at its origin O_i, the twist-propagation matrix

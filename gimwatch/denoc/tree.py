@@ -21,7 +21,7 @@ from gimwatch.model.urdf_text import check_urdf
 
 __all__ = ["FREE_FLYER_NAME", "JOINT_KINDS", "BodyTree", "read_body_tree"]
 
-#: Joint types DeNOC reads, and the code each moving one gets in :attr:`BodyTree.kind`.
+#: Joint types DeNOC reads, and the code each moving one gets in `BodyTree.kind`.
 JOINT_KINDS = {"revolute": 1, "continuous": 2, "prismatic": 3}
 _SUPPORTED = (*JOINT_KINDS, "fixed")
 #: Name of the 6-DoF root joint, as in Pinocchio's free-flyer models.
@@ -129,7 +129,7 @@ def _load_yourdfpy(root: ET.Element, source: str):
 
 
 def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>") -> BodyTree:
-    """Read URDF text into a :class:`BodyTree`.
+    """Read URDF text into a [`BodyTree`][gimwatch.denoc.BodyTree].
 
     Raises:
         URDFError: The links do not form a tree, a joint type is not revolute, continuous,

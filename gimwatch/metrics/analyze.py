@@ -1,9 +1,9 @@
 """``analyze``: conditioning of a robot's GIM at configurations, on the path that fits it.
 
 The dense path forms M with Pinocchio's CRBA and gives every metric and the whole spectrum;
-the O(n) path (:mod:`gimwatch.metrics.linear_analysis`) never forms M nor builds a Pinocchio
-Data, whose memory grows as nv³. :func:`choose_path` picks it: above
-:data:`~gimwatch.model.robots.DATA_NV_LIMIT` coordinates a fixed-base generated chain goes
+the O(n) path (`gimwatch.metrics.linear_analysis`) never forms M nor builds a Pinocchio
+Data, whose memory grows as nv³. `choose_path` picks it: above
+`DATA_NV_LIMIT` coordinates a fixed-base generated chain goes
 the O(n) way, everything else the dense way, unless the caller asks for one.
 """
 
@@ -21,6 +21,7 @@ from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import (
     DATA_NV_LIMIT,
     check_random_budget,
+    default_floating,
     load_robot,
     neutral_configuration,
     parse_chain_spec,
@@ -30,7 +31,7 @@ from gimwatch.model.robots import (
 
 __all__ = ["LINEAR_NV_LIMIT", "PATHS", "Analysis", "analyze", "choose_path"]
 
-#: ``backend`` values: ``auto`` lets :func:`choose_path` decide.
+#: ``backend`` values: ``auto`` lets `choose_path` decide.
 PATHS = ("auto", "crba", "denoc")
 #: The O(n) path's largest chain: diag, pivots and κ stay O(n) (about 1 kB per link).
 LINEAR_NV_LIMIT = 200_000
@@ -41,17 +42,19 @@ class Analysis:
     """The analyses of one robot, and the path that made them.
 
     Attributes:
-        results: One :class:`GimAnalysis` per configuration.
+        results: One [`GimAnalysis`][gimwatch.metrics.dense_analysis.GimAnalysis] per configuration.
         path: ``"crba"`` (dense M) or ``"denoc"`` (O(n), no M).
         chosen: True when ``auto`` chose the path (the caller may want to say why).
         placeholder_limits: Joints whose placeholder limits (|limit| >= 1e3 or none) random
             configurations replaced by ±π rad / ±1 m; empty when none were drawn.
+        floating: Whether the base was a free-flyer (as asked, or the robot's default).
     """
 
     results: tuple[GimAnalysis, ...]
     path: str
     chosen: bool
     placeholder_limits: tuple[str, ...] = ()
+    floating: bool = False
 
 
 def choose_path(spec: str, *, floating: bool = False, backend: str = "auto") -> str:
@@ -89,7 +92,7 @@ def _robot_configurations(robot, q, random, seed, key, spec) -> list:
     return _configurations(q, random, seed, robot.nq, neutral, draw, robot, key=key, spec=spec)
 
 
-def _linear(spec, q, random, seed, metrics, floating, key) -> list[GimAnalysis]:
+def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> list[GimAnalysis]:
     """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
     from gimwatch.denoc import DenocModel
     from gimwatch.metrics.linear_analysis import (
@@ -117,7 +120,11 @@ def _linear(spec, q, random, seed, metrics, floating, key) -> list[GimAnalysis]:
             spec=spec,
         )
     else:
-        robot = load_robot(spec)
+        robot = load_robot(spec, body=body, armature=armature)
+        if not robot.urdf_xml or np.any(np.asarray(robot.model.armature)):
+            raise InputError(
+                "backend denoc", "a URDF tree of hinges and slides without armature", spec
+            )
         model = DenocModel.from_urdf(
             robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
         )
@@ -132,10 +139,12 @@ def analyze(
     *,
     random: int | None = None,
     seed: int = 0,
-    floating: bool = False,
+    floating: bool | None = None,
     backend: str = "auto",
     metrics: Sequence[str] | None = None,
     key: str = "q",
+    body: str = "",
+    armature: bool = True,
 ) -> Analysis:
     """Analyse ``spec`` (``chain:N``, a URDF or MJCF path, an example-robot-data name).
 
@@ -144,22 +153,29 @@ def analyze(
         q: One configuration as a user writes it (a continuous joint by its angle), or None.
         random: Analyse this many random configurations within the joint limits instead.
         seed: Seed of the random configurations (and of Lanczos on the O(n) path).
-        floating: Add a free-flyer base (dense path only).
-        backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see :func:`choose_path`.
+        floating: True: a free-flyer base (dense path only); False: fixed; None: the robot's
+            default (`default_floating`: example-robot-data's base for its robots).
+        backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see `choose_path`.
         metrics: On the O(n) path, a subset of its metrics; the dense path computes all.
         key: The name of ``q`` in error messages (``--q`` for the CLI).
+        body: MJCF only: analyse the subtree of this body (see `load_robot`).
+        armature: MJCF only: keep MuJoCo's ``dof_armature`` in M.
 
     Returns:
-        The :class:`Analysis`: the results and the path taken.
+        The `Analysis`: the results and the path taken.
     """
+    if floating is None:
+        floating = parse_chain_spec(spec) is None and default_floating(spec)
     path = choose_path(spec, floating=floating, backend=backend)
     if metrics is not None and path != "denoc":
         raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
     placeholders: tuple[str, ...] = ()
     if path == "denoc":
-        results = _linear(spec, q, random, seed, metrics, floating, key)
+        results = _linear(spec, q, random, seed, metrics, floating, key, body, armature)
     else:
-        robot = load_robot(spec, floating=floating, max_nv=DATA_NV_LIMIT)
+        robot = load_robot(
+            spec, floating=floating, max_nv=DATA_NV_LIMIT, body=body, armature=armature
+        )
         qs = _robot_configurations(robot, q, random, seed, key, spec)
         data = robot.new_data()
         results = [analyze_configuration(robot, np.asarray(x), data=data) for x in qs]
@@ -170,4 +186,5 @@ def analyze(
         path=path,
         chosen=backend == "auto",
         placeholder_limits=placeholders,
+        floating=floating,
     )

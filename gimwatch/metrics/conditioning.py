@@ -2,19 +2,24 @@
 
 Pure NumPy/SciPy: this module knows no robot. Every function that takes a full matrix
 checks it first (square, finite, symmetric, positive definite) and raises
-:class:`~gimwatch.errors.ConditioningError` otherwise.
+[`ConditioningError`][gimwatch.errors.ConditioningError] otherwise.
 
 Metrics (Shah & Saha 2013):
 
-* :func:`condition_number` — κ₂ = λmax / λmin (Eq. 6), from a symmetric eigensolver.
-* :func:`diagonal_ratio` — δ = max_i M_ii / min_i M_ii (Sec. 4); free once diag M is known.
-* :class:`ScaledDiagonalRatio` — αδ with α = κ(t0) / δ(t0) (Eq. 15).
-* :func:`pivot_ratio_forward` / :func:`pivot_ratio_backward` — max/min pivot of Gaussian
-  elimination without pivoting (Sec. 4, Fig. 4), eliminating from the first coordinate
-  (LDLᵀ, the paper's order) or from the last (UDUᵀ, the order of Pinocchio's
-  ``cholesky.decompose`` and of the O(n) forward-dynamics recursions).
-* :func:`condition_estimate_1norm` — LAPACK ``pocon``'s estimate of κ₁ from the Cholesky
-  factor, a cheap baseline (O(n²) after the O(n³) factorisation).
+* [`condition_number`][gimwatch.metrics.conditioning.condition_number] — κ₂ = λmax / λmin (Eq. 6),
+  from a symmetric eigensolver.
+* [`diagonal_ratio`][gimwatch.metrics.conditioning.diagonal_ratio] — δ = max_i M_ii / min_i M_ii
+  (Sec. 4); free once diag M is known.
+* [`ScaledDiagonalRatio`][gimwatch.metrics.conditioning.ScaledDiagonalRatio] — αδ with α = κ(t0) /
+  δ(t0) (Eq. 15).
+* [`pivot_ratio_forward`][gimwatch.metrics.conditioning.pivot_ratio_forward] /
+  [`pivot_ratio_backward`][gimwatch.metrics.conditioning.pivot_ratio_backward] — max/min pivot of
+  Gaussian elimination without pivoting (Sec. 4, Fig. 4), eliminating from the first coordinate
+  (LDLᵀ, the paper's order) or from the last (UDUᵀ, the order of Pinocchio's ``cholesky.decompose``
+  and of the O(n) forward-dynamics recursions).
+* [`condition_estimate_1norm`][gimwatch.metrics.conditioning.condition_estimate_1norm] — LAPACK
+  ``pocon``'s estimate of κ₁ from the Cholesky factor, a cheap baseline (O(n²) after the O(n³)
+  factorisation).
 """
 
 from __future__ import annotations
@@ -87,7 +92,19 @@ def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
     recomputed with SciPy's ``syevr`` (the driver gimwatch used before) before M is declared
     not positive definite, so such numerically singular GIMs keep their former verdict.
     """
+    values, scale = _scaled_eigenvalues(matrix)
+    return values * scale
+
+
+def _scaled_eigenvalues(matrix: npt.ArrayLike) -> tuple[np.ndarray, float]:
+    """Eigenvalues of M / s (ascending) and s = 2^k <= max |M_ij| < 2^(k+1).
+
+    Solving the scaled matrix keeps a finite M finite (``[[2, 1], [1, 2]] · 8e307``: κ = 3,
+    where the unscaled solve overflows); a power of two scales without rounding.
+    """
     M = check_gim(matrix)
+    scale = float(np.ldexp(1.0, int(np.frexp(np.max(np.abs(M)))[1]) - 1))
+    M = M / scale
     values = np.linalg.eigvalsh(M)
     if values[0] <= 0:
         import scipy.linalg
@@ -95,16 +112,17 @@ def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
         values = scipy.linalg.eigvalsh(M, check_finite=False)
     if values[0] <= 0:
         raise ConditioningError(
-            f"the GIM must be positive definite, got smallest eigenvalue {values[0]:.6g}"
+            f"the GIM must be positive definite, got smallest eigenvalue {values[0] * scale:.6g}"
         )
-    return values
+    return values, scale
 
 
 def eigenpairs(matrix: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Eigenvalues (ascending) and eigenvectors (columns) of the GIM (SciPy's ``eigh``).
 
     The eigenvalues are as LAPACK returns them: near κ = 1/eps the smallest may come out
-    ≤ 0, which the caller judges (:func:`eigenvalues` refuses it).
+    ≤ 0, which the caller judges ([`eigenvalues`][gimwatch.metrics.conditioning.eigenvalues] refuses
+    it).
 
     Raises:
         ConditioningError: M is not a valid GIM.
@@ -130,7 +148,7 @@ def condition_number(matrix: npt.ArrayLike) -> float:
     Round-off limits it: λmin is known only to about eps·λmax, so values near 1/eps
     (~4.5e15) carry no digits.
     """
-    return extreme_ratio(eigenvalues(matrix))
+    return extreme_ratio(_scaled_eigenvalues(matrix)[0])
 
 
 def _real_array(value: npt.ArrayLike, what: str) -> np.ndarray:
@@ -178,7 +196,7 @@ class ScaledDiagonalRatio:
     costs only the diagonal ratio. Calibrating again is refused so that α cannot be tuned
     after the fact.
 
-    Example:
+    Examples:
         >>> import numpy as np
         >>> estimator = ScaledDiagonalRatio()
         >>> estimator.calibrate(np.diag([4.0, 1.0]))
@@ -277,7 +295,7 @@ ILL_CONDITIONED_KAPPA_EPS = 1e-2
 
 
 def warn_if_ill_conditioned(kappa: float, *, where: str, stacklevel: int = 2) -> bool:
-    """Issue ``IllConditionedWarning`` when κ·eps ≥ :data:`ILL_CONDITIONED_KAPPA_EPS`.
+    """Issue ``IllConditionedWarning`` when κ·eps ≥ `ILL_CONDITIONED_KAPPA_EPS`.
 
     ``where`` names what M belongs to (robot, configuration) and starts the message.
     Returns True when the warning was issued.

@@ -31,7 +31,7 @@ class GimAnalysis:
     Attributes:
         robot: Robot name.
         method: ``"crba"`` (dense M from Pinocchio, symmetric eigensolver) or
-            ``"denoc-linear"`` (the O(n) path of :mod:`gimwatch.metrics.linear_analysis`: κ by
+            ``"denoc-linear"`` (the O(n) path of `gimwatch.metrics.linear_analysis`: κ by
             Lanczos,
             ``eigenvalues`` only (λmin, λmax), no forward pivots).
         nv: Size of the GIM.
@@ -90,7 +90,7 @@ def check_massless(
 
 
 def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
-    """Check M(q) of ``robot`` like :func:`~gimwatch.metrics.conditioning.check_gim`, naming joints.
+    """Check M(q) of ``robot`` like `check_gim`, naming joints.
 
     Raises:
         ConditioningError: A coordinate moves no mass (M singular), naming the URDF and the
@@ -100,7 +100,8 @@ def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
     return check_gim(M)
 
 
-#: The scalar metrics of a :class:`GimAnalysis`, in its field order (registry names).
+#: The scalar metrics of a [`GimAnalysis`][gimwatch.metrics.dense_analysis.GimAnalysis], in its
+#: field order (registry names).
 ANALYSIS_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_forward", "pivot_ratio_backward")
 
 
@@ -114,7 +115,7 @@ def analysis_record(
     dof_names: Sequence[str],
     method: str,
 ) -> GimAnalysis:
-    """The :class:`GimAnalysis` of one state: the named registry metrics, the others None.
+    """The `GimAnalysis` of one state: the named registry metrics, the others None.
 
     The spectrum is the full one when M is formed, else (the O(n) path) λmin and λmax.
     """

@@ -1,7 +1,7 @@
 """Conditioning of long chains by the O(n) DeNOC path: no Pinocchio Data, no dense M.
 
 Pinocchio's Data for an n-joint model needs memory growing as n³ (about 1.8 GB at n = 300,
-8 GB at 500), and the dense GIM n². Above :data:`~gimwatch.model.robots.DATA_NV_LIMIT` joints
+8 GB at 500), and the dense GIM n². Above `DATA_NV_LIMIT` joints
 (or on request) gimwatch analyses fixed-base chains and trees with the compiled DeNOC
 recursions instead: diag M and δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each);
 the backward (UDUᵀ) pivots from the articulated-body factor. The forward (LDLᵀ) pivots and
@@ -31,9 +31,10 @@ LINEAR_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_backward")
 def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np.ndarray:
     """Random configurations of a generated chain, shape ``(count, n)``, within its limits.
 
-    Draws exactly what :func:`gimwatch.model.robots.random_configurations` draws for the same
-    chain and seed (one uniform number per joint and configuration, joint by joint), without
-    building a Pinocchio model.
+    Draws exactly what
+    [`random_configurations`][gimwatch.model.robots.random_configurations]
+    draws for the same chain and seed (one uniform number per joint and configuration, joint by
+    joint), without building a Pinocchio model.
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise InputError("count", "a positive integer", count)
@@ -59,7 +60,7 @@ def analyze_linear(
         model: The DeNOC model (fixed base).
         q: Configuration in the model's layout.
         name: Robot name for the record.
-        metrics: Which of :data:`LINEAR_METRICS` to compute; the others are None.
+        metrics: Which of `LINEAR_METRICS` to compute; the others are None.
         seed: Seed of the Lanczos start vector.
         rtol: Relative change of the Ritz values at which Lanczos stops.
     """

@@ -7,7 +7,7 @@ Pinocchio never has to form M for these:
 * ``M(q)⁻¹ y = ABA(q, v = 0, tau = y)`` with gravity off (the forward-dynamics
   acceleration of a torque ``y`` from rest), O(n) per product.
 
-Lanczos (ARPACK through :func:`scipy.sparse.linalg.eigsh`) on the first operator gives
+Lanczos (ARPACK through `scipy.sparse.linalg.eigsh`) on the first operator gives
 λmax, on the second 1/λmin, so κ₂ = λmax / λmin (Shah & Saha 2013, Eq. 6) costs a few dozen
 O(n) recursions instead of an O(n³) eigen-solve. The start vector is random and seeded: a
 vector of ones is nearly orthogonal to the smallest eigenvectors of straight chains, and
@@ -125,7 +125,8 @@ def kappa_matrix_free(
         start: ``(vector_max, vector_min)`` of a previous, nearby sample to warm-start from.
 
     Returns:
-        The :class:`MatrixFreeKappa` record, with the eigenvectors for the next warm start.
+        The [`MatrixFreeKappa`][gimwatch.denoc.MatrixFreeKappa] record, with the eigenvectors for
+        the next warm start.
     """
     q = as_configuration(robot, q)
     if not (np.isfinite(tol) and tol >= 0):

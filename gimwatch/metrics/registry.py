@@ -1,11 +1,11 @@
 """The metric registry: every conditioning metric of M(q), declared once, looked up by name.
 
 The watch, ``analyze`` (dense and O(n) paths), the survey, the stress suite and the bench
-evaluate metrics through :data:`METRICS` on one :class:`GimState` per configuration. The
+evaluate metrics through `METRICS` on one `GimState` per configuration. The
 state computes the expensive quantities lazily, at most once, and only when a metric asks:
 
-* ``M`` — Pinocchio's CRBA (:func:`gimwatch.model.inertia.gim`), a dynamics backend's
-  ``gim(q)`` (DeNOC dense, MuJoCo) or a matrix given by the caller; O(n²) to form;
+* ``M`` — Pinocchio's CRBA ([`gim`][gimwatch.model.inertia.gim]), a dynamics
+  backend's ``gim(q)`` (DeNOC dense, MuJoCo) or a matrix given by the caller; O(n²) to form;
 * ``diag`` — read off M when M is needed anyway, else O(n) without M: DeNOC's compiled
   composite-mass recursion (one call, buffers kept), the backend's ``gim_diagonal(q)``, or
   DeNOC's linear-time state;
@@ -15,9 +15,9 @@ state computes the expensive quantities lazily, at most once, and only when a me
 * ``ldlt_pivots`` / ``udut_pivots`` — from the Cholesky factor of M, or (UDUᵀ) from the O(n)
   articulated-body factor of the linear-time state.
 
-Adding a metric: subclass :class:`Metric` (set ``name`` and ``full``, and write
+Adding a metric: subclass `Metric` (set ``name`` and ``full``, and write
 ``__call__(state)`` reading only what it needs from the state), decorate it with
-:func:`register` (or list it in :data:`METRICS`), and test it against an independent value;
+`register` (or list it in `METRICS`), and test it against an independent value;
 ``gimwatch metrics``, scenes, the watch and the CLI read the registry. See
 ``docs/contributing.md``.
 """
@@ -31,7 +31,6 @@ import numpy as np
 
 from gimwatch.errors import ConditioningError
 from gimwatch.metrics import conditioning
-from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
 
 __all__ = ["METRICS", "GimState", "Metric", "evaluate", "register"]
@@ -129,12 +128,12 @@ class GimState:
     def eigenpairs(self) -> tuple[np.ndarray, np.ndarray]:
         """Eigenvalues as LAPACK returns them (λmin may be ≤ 0 near κ = 1/eps) and vectors.
 
-        One ``eigh``; a positive spectrum then also serves :attr:`eigenvalues`.
+        One ``eigh``; a positive spectrum then also serves `eigenvalues`.
         """
         if self._vectors is None:
             values, self._vectors = conditioning.eigenpairs(self.M)
             self._raw = values
-            if values[0] > 0:  # else :attr:`eigenvalues` judges the spectrum itself
+            if values[0] > 0:  # else `eigenvalues` judges the spectrum itself
                 self._eig = values
         return self._raw, self._vectors
 
@@ -200,9 +199,10 @@ class Kappa(Metric):
 class KappaLanczos(Metric):
     """κ₂ = λmax / λmin (Eq. 6) by low-accuracy Lanczos on the RNEA and ABA operators.
 
-    No M is formed (:func:`gimwatch.metrics.matrix_free.kappa_matrix_free`, ARPACK tolerance
-    :attr:`TOL`); each sample starts from the previous sample's extreme eigenvectors, so
-    along a smooth trajectory a few O(n) products per sample suffice.
+    No M is formed
+    ([`kappa_matrix_free`][gimwatch.metrics.matrix_free.kappa_matrix_free], ARPACK tolerance `TOL`);
+    each sample starts from the previous sample's extreme eigenvectors, so along a smooth trajectory
+    a few O(n) products per sample suffice.
     """
 
     name = "kappa_lanczos"
@@ -214,6 +214,10 @@ class KappaLanczos(Metric):
         self.data = None
 
     def __call__(self, state):
+        # imported here: SciPy's ARPACK and the compiled DeNOC kernels cost ~0.4 s to import,
+        # which the dense path (analyze, the watch without this metric) never pays
+        from gimwatch.metrics.matrix_free import kappa_matrix_free
+
         if self.data is None:  # RNEA/ABA need a Pinocchio Data, even when M comes from DeNOC
             self.data = state.robot.new_data() if state.data is None else state.data
         result = kappa_matrix_free(
@@ -226,10 +230,10 @@ class KappaLanczos(Metric):
 class KappaTracked(Metric):
     """κ₂ = λmax / λmin (Eq. 6) to a relative tolerance 1e-10, tracked at O(n) per sample.
 
-    :class:`gimwatch.metrics.tracker.KappaTracker` on DeNOC's compiled M·x and M⁻¹·y (or
-    Pinocchio's RNEA/ABA when DeNOC cannot read the robot), warm-started from the previous
-    sample's eigenvectors, with a detected cold-start fallback. ``products`` lists the O(n)
-    products each sample took.
+    [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on DeNOC's
+    compiled M·x and M⁻¹·y (or Pinocchio's RNEA/ABA when DeNOC cannot read the robot), warm-started
+    from the previous sample's eigenvectors, with a detected cold-start fallback. ``products`` lists
+    the O(n) products each sample took.
     """
 
     name = "kappa_tracked"
@@ -242,7 +246,7 @@ class KappaTracked(Metric):
     def __call__(self, state):
         if self.tracker is None:
             from gimwatch.metrics.tracker import KappaTracker
-            from gimwatch.metrics.tracker_providers import gim_products
+            from gimwatch.metrics.tracker.providers import gim_products
 
             provider = state.lean or gim_products(state.robot, state.dynamics, state.data)
             self.tracker = KappaTracker(provider, state.robot.nv)
@@ -348,7 +352,7 @@ METRICS: dict[str, type[Metric]] = {
 
 
 def register(cls: type[Metric]) -> type[Metric]:
-    """Class decorator: add a metric to :data:`METRICS` under its ``name``."""
+    """Class decorator: add a metric to `METRICS` under its ``name``."""
     if cls.name in METRICS:
         raise ValueError(f"metric {cls.name!r} is already registered")
     METRICS[cls.name] = cls

@@ -1,7 +1,7 @@
 """The robots of example-robot-data: their names, their URDF files, and what differs.
 
 gimwatch reads the URDF file a name's loader class points at, as written (no joints locked,
-no rotor inertias from the SRDF); :data:`EXAMPLE_ROBOT_NOTES` says where that differs from
+no rotor inertias from the SRDF); `EXAMPLE_ROBOT_NOTES` says where that differs from
 what the name or ``example_robot_data.load(name)`` gives.
 """
 
@@ -30,8 +30,9 @@ def example_robot_loaders() -> dict[str, type]:
 
 #: example-robot-data names whose model, as gimwatch loads it (the URDF file as written, no
 #: reduction), is not what the name or ``example_robot_data.load(name)`` suggests.
-#: ``load_robot`` issues each as one :class:`~gimwatch.errors.ExampleRobotWarning`; the test
-#: ``tests/test_example_robot_loader.py`` compares every name with ``example_robot_data.load``.
+#: ``load_robot`` issues each as one [`ExampleRobotWarning`][gimwatch.errors.ExampleRobotWarning];
+#: the test ``tests/test_example_robot_loader.py`` compares every name with
+#: ``example_robot_data.load``.
 _UR5_AS_UR3 = "example-robot-data 5.0.0 ships a UR5 description under the name ur3"
 _TALOS_ROTORS = (
     "example_robot_data.load adds rotor inertias from the SRDF (armature = rotor inertia x "

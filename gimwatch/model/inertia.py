@@ -1,10 +1,10 @@
 """The generalized inertia matrix (GIM) M(q) of a robot, from Pinocchio.
 
-* :func:`gim` — the full symmetric M(q) from the composite-rigid-body algorithm (CRBA),
-  O(n^2) time and memory.
-* :func:`gim_diagonal` — only diag M(q), in O(n) time without forming M, from the
-  composite (subtree) inertias: ``M_kk = S_k^T Ĩ_k S_k`` where S_k is the motion subspace of
-  coordinate k and Ĩ_k the composite inertia of the subtree below its joint, both in the
+* [`gim`][gimwatch.model.inertia.gim] — the full symmetric M(q) from the composite-rigid-body
+  algorithm (CRBA), O(n^2) time and memory.
+* [`gim_diagonal`][gimwatch.model.inertia.gim_diagonal] — only diag M(q), in O(n) time without
+  forming M, from the composite (subtree) inertias: ``M_kk = S_k^T Ĩ_k S_k`` where S_k is the motion
+  subspace of coordinate k and Ĩ_k the composite inertia of the subtree below its joint, both in the
   world frame. This is the diagonal of Shah & Saha (2013), Eq. (11), ``I_ii = p_i^T M̃_i p_i``.
 """
 

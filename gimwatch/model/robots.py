@@ -1,19 +1,24 @@
-"""Turn a robot specification into a :class:`Robot` (a Pinocchio model plus what it came from).
+"""Turn a robot specification into a `Robot` (a Pinocchio model plus what it came from).
 
 A specification is one of:
 
 * ``chain:N`` — the paper's chain of N slender rods (2.2 kg, 1 m), generated on the fly;
 * a path to a URDF file;
-* a path to an MJCF file (``.xml`` whose root element is ``<mujoco>``), read by
-  Pinocchio's MJCF parser (``pinocchio.buildModelFromMJCF``);
+* a path to an MJCF file (``.xml`` whose root element is ``<mujoco>``), compiled by MuJoCo
+  and rebuilt in Pinocchio from the compiled model (`gimwatch.model.mjcf_compiled`);
 * the name of a robot in example-robot-data (``ur5``, ``panda``, ``talos_arm``, ...).
 
-DeNOC reads URDF only: an MJCF robot has ``urdf_xml == ""`` and its text in ``mjcf_xml``;
-``gimwatch crosscheck`` then compares Pinocchio with MuJoCo (docs/robots.md).
+An MJCF robot keeps its file's text in ``mjcf_xml``; its ``urdf_xml`` is URDF text written
+from the compiled model when DeNOC can read the tree (hinges and slides on one tree, at most
+a free joint at its root), else "" (docs/robots.md).
 
-The base is fixed unless ``floating=True``, which adds Pinocchio's free-flyer root joint.
-No :class:`pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
-nv = 300), so callers ask for it with :meth:`Robot.new_data` only when they need it.
+The base is the one example-robot-data's loader gives a robot of its own (a free-flyer for
+legged robots, humanoids and drones, as ``example_robot_data.load(name)`` builds them; see
+`default_floating`), and fixed for chains and files; ``floating=True`` adds Pinocchio's
+free-flyer root joint, ``floating=False`` fixes the base.
+No `pinocchio.Data` is built here: its memory grows as nv^3 (about 1.8 GB at
+nv = 300), so callers ask for it with [`Robot.new_data`][gimwatch.model.robots.Robot.new_data] only
+when they need it.
 """
 
 from __future__ import annotations
@@ -39,8 +44,7 @@ from gimwatch.model.example_robots import (
     example_robot_names,
     example_robot_urdf,
 )
-from gimwatch.model.mjcf_model import build_mjcf_model, is_mjcf
-from gimwatch.model.mjcf_values import check_mjcf
+from gimwatch.model.mjcf_model import is_mjcf
 from gimwatch.model.sampling import (
     PLACEHOLDER_LIMIT,
     check_random_budget,
@@ -56,6 +60,7 @@ __all__ = [
     "captured_c_output",
     "chain_robot",
     "check_random_budget",
+    "default_floating",
     "example_robot_names",
     "is_mjcf",
     "load_robot",
@@ -63,6 +68,7 @@ __all__ = [
     "parse_chain_spec",
     "placeholder_limit_joints",
     "random_configurations",
+    "unit_blocks",
 ]
 
 _CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
@@ -87,7 +93,10 @@ class Robot:
         source: Where the URDF came from (a path, or ``"<generated chain_N>"``).
         floating: Whether a free-flyer root joint was added.
         chain: The chain spec for generated chains, else None.
-        mjcf_xml: The MJCF text for robots read from MJCF (then ``urdf_xml`` is ""), else "".
+        mjcf_xml: The MJCF text for robots read from MJCF, else "".
+        mjcf_body: For MJCF, the body whose subtree was selected ("" for the whole model).
+        mjcf_armature: For MJCF, whether MuJoCo's ``dof_armature`` is in M (as in MuJoCo).
+        mujoco_joints: For MJCF, MuJoCo's joint id of each Pinocchio joint, else ().
     """
 
     name: str
@@ -98,6 +107,9 @@ class Robot:
     floating: bool = False
     chain: ChainSpec | None = None
     mjcf_xml: str = ""
+    mjcf_body: str = ""
+    mjcf_armature: bool = True
+    mujoco_joints: tuple[int, ...] = ()
     dof_names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -132,7 +144,7 @@ class Robot:
         return tuple(self.model.names[1:])
 
     def new_data(self) -> pin.Data:
-        """A fresh :class:`pinocchio.Data`; refuses models whose Data would not fit in memory."""
+        """A fresh `pinocchio.Data`; refuses models whose Data would not fit in memory."""
         if self.nv > DATA_NV_LIMIT:
             raise _too_large(self.spec, self.nv)
         return self.model.createData()
@@ -150,11 +162,31 @@ def _read_urdf(path: Path) -> str:
         size = path.stat().st_size
         if size > MAX_URDF_BYTES:
             raise URDFError(str(path), f"is {size} bytes, more than {MAX_URDF_BYTES} for a URDF")
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise URDFError(str(path), f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from exc
+        return decode_xml(path.read_bytes(), str(path))
     except OSError as exc:
         raise URDFError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
+
+
+def decode_xml(data: bytes, source: str) -> str:
+    """XML bytes as text: UTF-8 without a byte-order mark, or the declared encoding.
+
+    CAD exporters write ``<?xml version="1.0" encoding="ISO-8859-1"?>`` with accented
+    names in comments; a file that is neither is refused naming the first bad byte.
+    """
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        failure = exc
+    _, found, rest = data[:200].decode("ascii", errors="replace").partition("encoding=")
+    declared = rest[1:].split(rest[0], 1)[0] if found and rest[:1] in ("'", '"') else ""
+    try:
+        if declared and declared.lower().replace("_", "-") not in ("utf-8", "utf8"):
+            return data.decode(declared)
+    except (LookupError, UnicodeDecodeError):
+        pass
+    raise URDFError(
+        source, f"is not UTF-8 text ({failure.reason} at byte {failure.start})"
+    ) from failure
 
 
 def path_problem(path: Path) -> str:
@@ -167,10 +199,11 @@ def path_problem(path: Path) -> str:
     return "no such file"
 
 
-def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
-    from gimwatch.model.urdf_text import check_urdf
+def _build_model(xml: str, source: str, floating: bool) -> tuple[pin.Model, str]:
+    """Pinocchio's model of checked URDF text, and the text it read (normalised quirks)."""
+    from gimwatch.model.urdf_text import check_urdf_text
 
-    root = check_urdf(xml, source)
+    root, xml = check_urdf_text(xml, source, stacklevel=3)
     depth = _tree_depth(root)
     if depth > MAX_TREE_DEPTH:
         raise URDFError(
@@ -192,7 +225,7 @@ def _build_model(xml: str, source: str, floating: bool) -> pin.Model:
     if model is None or errors:
         detail = errors[0].removeprefix("Error:").strip() if errors else str(failure)
         raise URDFError(source, f"Pinocchio cannot build a model: {detail}")
-    return model
+    return model, xml
 
 
 def _tree_depth(root) -> int:
@@ -228,26 +261,41 @@ def _too_deep(spec: str) -> RobotError:
     )
 
 
-def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> Robot:
-    check_mjcf(xml, source)
-    model = build_mjcf_model(source, floating, xml)
+def _mjcf_robot(
+    xml: str, source: str, name: str, spec: str, floating: bool, body: str, armature: bool
+) -> Robot:
+    from gimwatch.model.mjcf_robot import read_mjcf
+
+    model, joint_ids, urdf_xml = read_mjcf(source, floating=floating, body=body, armature=armature)
+    return _robot(
+        model,
+        name=f"{name}[{body}]" if body else name,  # reports say which subtree was read
+        spec=spec,
+        urdf_xml=urdf_xml,
+        source=source,
+        floating=floating,
+        mjcf_xml=xml,
+        mjcf_body=body,
+        mjcf_armature=armature,
+        mujoco_joints=joint_ids,
+    )
+
+
+def _robot(model: pin.Model, *, spec: str, **fields) -> Robot:
+    """The one place a `Robot` is made, from a URDF's or an MJCF's Pinocchio model.
+
+    Raises:
+        RobotError: The model has no degree of freedom (a fixed single body).
+    """
     if model.nv == 0:
         raise RobotError(
             spec, "has no degree of freedom with a fixed base; load it with a floating base"
         )
-    return Robot(
-        name=name,
-        spec=spec,
-        model=model,
-        urdf_xml="",
-        source=source,
-        floating=floating,
-        mjcf_xml=xml,
-    )
+    return Robot(model=model, spec=spec, **fields)
 
 
 def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
-    """The :class:`ChainSpec` of a ``chain:N`` specification, or None for other specs."""
+    """The `ChainSpec` of a ``chain:N`` specification, or None for other specs."""
     match = _CHAIN_SPEC.match(str(spec))
     if not match:
         return None
@@ -258,17 +306,40 @@ def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
     return chain_spec(n)
 
 
-def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None = None) -> Robot:
+def default_floating(spec: str | Path) -> bool:
+    """The base a robot gets when none is asked for: True for a free-flyer.
+
+    An example-robot-data robot gets its loader's (``free_flyer``: legged robots, humanoids,
+    drones), so that ``load_robot(name)`` has the nq and nv of ``example_robot_data.load``;
+    chains and files get a fixed base.
+    """
+    loader = example_robot_loaders().get(str(spec))
+    return bool(getattr(loader, "free_flyer", False)) if loader is not None else False
+
+
+def load_robot(
+    spec: str | Path,
+    floating: bool | None = None,
+    *,
+    max_nv: int | None = None,
+    body: str = "",
+    armature: bool = True,
+) -> Robot:
     """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
 
     Args:
         spec: The robot specification (see the module docstring).
-        floating: Add a free-flyer root joint (6 DoF) instead of fixing the base.
+        floating: True adds a free-flyer root joint (6 DoF), False fixes the base; None (the
+            default): `default_floating`, example-robot-data's base for its robots
+            (a free-flyer for ``anymal``, ``solo12``, ``talos``, ...), fixed otherwise.
         max_nv: Refuse generated chains with more velocity coordinates than this before
             building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
+        body: MJCF only: read the subtree of this body (its ancestors held at ``qpos0``)
+            instead of the whole model.
+        armature: MJCF only: keep MuJoCo's ``dof_armature`` in M (False leaves it out).
 
     Returns:
-        The loaded :class:`Robot`.
+        The loaded [`Robot`][gimwatch.model.robots.Robot].
 
     Raises:
         RobotError: The spec names nothing loadable, or the model has no degree of freedom.
@@ -278,6 +349,8 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
     if not text.strip():
         raise InputError("the robot", "chain:N, a URDF path or an example-robot-data name", text)
     chain = parse_chain_spec(text)
+    if floating is None:
+        floating = chain is None and default_floating(text)
     if chain is not None:
         n = chain.n
         if max_nv is not None and n + 6 * floating > max_nv:
@@ -294,29 +367,21 @@ def load_robot(spec: str | Path, floating: bool = False, *, max_nv: int | None =
         path = Path(text)
         xml, source, name = _read_urdf(path), str(path), path.stem
         if is_mjcf(xml):
-            return _mjcf_robot(xml, source, name, text, floating)
+            return _mjcf_robot(xml, source, name, text, floating, body, armature)
     else:
         close = difflib.get_close_matches(text, example_robot_loaders(), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
-    model = _build_model(xml, source, floating)
-    if model.nv == 0:
-        raise RobotError(
-            text, "has no degree of freedom with a fixed base; load it with a floating base"
-        )
-    return Robot(
-        name=name,
-        spec=text,
-        model=model,
-        urdf_xml=xml,
-        source=source,
-        floating=floating,
-        chain=chain,
+    if body:
+        raise InputError("--body", "given only with an MJCF file", body)
+    model, xml = _build_model(xml, source, floating)
+    return _robot(
+        model, name=name, spec=text, urdf_xml=xml, source=source, floating=floating, chain=chain
     )
 
 
 def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
-    """A :class:`Robot` for a generated chain of any rods (no Pinocchio Data is built).
+    """A `Robot` for a generated chain of any rods (no Pinocchio Data is built).
 
     Raises:
         RobotError: The chain is deeper than Pinocchio's URDF parser can read.
@@ -325,8 +390,16 @@ def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
         raise _too_deep(f"chain:{spec.n}")
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
-    model = _build_model(xml, source, floating)
-    return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
+    model, xml = _build_model(xml, source, floating)
+    return _robot(
+        model,
+        name=spec.name,
+        spec=f"chain:{spec.n}",
+        urdf_xml=xml,
+        source=source,
+        floating=floating,
+        chain=spec,
+    )
 
 
 def neutral_configuration(robot: Robot) -> np.ndarray:
@@ -338,11 +411,43 @@ def neutral_configuration(robot: Robot) -> np.ndarray:
 UNIT_NORM_TOLERANCE = 1e-6
 
 
+def unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Where q's unit blocks end, their sizes and joints: computed once per robot, kept on it."""
+    blocks = robot.__dict__.get("_unit_blocks")
+    if blocks is None:
+        found = [
+            (joint.idx_q + joint.nq, unit_block_size(joint), name)
+            for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True)
+            if unit_block_size(joint)
+        ]
+        blocks = (
+            np.array([b[0] for b in found], dtype=np.int64),
+            np.array([b[1] for b in found], dtype=np.int64),
+            tuple(b[2] for b in found),
+        )
+        object.__setattr__(robot, "_unit_blocks", blocks)  # frozen: a cache, not state
+    return blocks
+
+
+def _unit_norms(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """The norm of every unit block of q, by one gather and one segmented sum (no joint loop)."""
+    gather = robot.__dict__.get("_unit_gather")
+    if gather is None:
+        stops, sizes, _ = unit_blocks(robot)
+        index = np.concatenate(
+            [np.arange(stop - size, stop) for stop, size in zip(stops, sizes, strict=True)]
+        )
+        gather = (index, np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp))
+        object.__setattr__(robot, "_unit_gather", gather)  # frozen: a cache, not state
+    index, offsets = gather
+    return np.sqrt(np.add.reduceat(q[index] ** 2, offsets))
+
+
 def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
     """Check that ``q`` is a finite real vector of length nq and return it as an array.
 
     Each unit block (a continuous joint's (cos θ, sin θ), a quaternion) must have norm 1
-    within :data:`UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
+    within `UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
     the joint (a zero rotation matrix) and giving a wrong M(q).
     """
     try:
@@ -356,16 +461,16 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
     if not np.all(np.isfinite(array)):
         raise InputError("q", "finite", array.tolist())
-    for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
-        unit = unit_block_size(joint)
-        if unit:
-            stop = joint.idx_q + joint.nq
-            norm = float(np.linalg.norm(array[stop - unit : stop]))
-            if not abs(norm - 1.0) <= UNIT_NORM_TOLERANCE:
-                what = "quaternion" if unit == 4 else "(cos θ, sin θ)"
-                raise InputError(
-                    f"the {what} of joint {name!r} in q",
-                    f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
-                    round(norm, 9),
-                )
+    stops, sizes, names = unit_blocks(robot)
+    if stops.size:
+        norms = _unit_norms(robot, array)
+        bad = np.flatnonzero(~(np.abs(norms - 1.0) <= UNIT_NORM_TOLERANCE))
+        if bad.size:
+            k = int(bad[0])
+            what = "quaternion" if sizes[k] == 4 else "(cos θ, sin θ)"
+            raise InputError(
+                f"the {what} of joint {names[k]!r} in q",
+                f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
+                round(float(norms[k]), 9),
+            )
     return array

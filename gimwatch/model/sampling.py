@@ -1,6 +1,6 @@
 """Configurations drawn at random within a robot's joint limits, and the limits' placeholders.
 
-A joint limit of |limit| >= :data:`PLACEHOLDER_LIMIT` (or infinite) is a URDF writer's way of
+A joint limit of |limit| >= `PLACEHOLDER_LIMIT` (or infinite) is a URDF writer's way of
 saying "unlimited"; such coordinates are drawn in ±π rad (angles) or ±1 m (translations).
 Quaternions and the unit complex numbers of continuous joints are drawn uniformly on their
 sphere.
@@ -9,15 +9,12 @@ sphere.
 from __future__ import annotations
 
 import os
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-
-if TYPE_CHECKING:
-    from gimwatch.model.robots import Robot
 
 __all__ = [
     "DEFAULT_MAX_RANDOM_WORK",
@@ -41,6 +38,14 @@ DEFAULT_MAX_RANDOM_WORK = 2_000_000
 MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
 
 
+class Robot(Protocol):
+    """What sampling reads of a `gimwatch.model.robots.Robot` (no import: no cycle)."""
+
+    name: str
+    nq: int
+    model: pin.Model
+
+
 def unit_block_size(joint: pin.JointModel) -> int:
     """Size of the unit-norm part of a joint's q (4 for quaternions, 2 for unit complex)."""
     if joint.nq == joint.nv:
@@ -61,9 +66,9 @@ def _is_real_limit(limit: np.ndarray) -> np.ndarray:
 def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
     """Joints with a coordinate whose limit is a placeholder (|limit| >= 1e3 or infinite).
 
-    :func:`random_configurations` draws those coordinates in ±π rad (angles) or ±1 m
-    (translations, the free-flyer's position included) instead. Continuous joints and
-    quaternions have no limit to read and are not listed.
+    [`random_configurations`][gimwatch.model.robots.random_configurations] draws those coordinates
+    in ±π rad (angles) or ±1 m (translations, the free-flyer's position included) instead.
+    Continuous joints and quaternions have no limit to read and are not listed.
     """
     model = robot.model
     lower, upper = np.array(model.lowerPositionLimit), np.array(model.upperPositionLimit)
@@ -103,8 +108,8 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     """Configurations drawn uniformly within the joint limits, shape ``(count, nq)``.
 
     Unbounded coordinates, and those whose limit is a placeholder (|limit| >= 1e3, see
-    :func:`placeholder_limit_joints`), are drawn in ±π rad (angles) or ±1 m (translations);
-    quaternions
+    [`placeholder_limit_joints`][gimwatch.model.robots.placeholder_limit_joints]), are drawn in ±π
+    rad (angles) or ±1 m (translations); quaternions
     and the unit complex numbers of continuous joints are drawn uniformly on their sphere.
 
     Args:

@@ -1,8 +1,8 @@
 """Checks on URDF text made before any parser builds a model from it.
 
 Pinocchio's parser (urdfdom) and yourdfpy both trust their input; this module turns the
-common ways a URDF can be broken into one-line :class:`~gimwatch.errors.URDFError` messages that
-name the file and the element. It imports no dynamics library, so DeNOC can use it too.
+common ways a URDF can be broken into one-line [`URDFError`][gimwatch.errors.URDFError] messages
+that name the file and the element. It imports no dynamics library, so DeNOC can use it too.
 """
 
 from __future__ import annotations
@@ -13,18 +13,32 @@ import warnings
 import xml.etree.ElementTree as ET
 
 from gimwatch.errors import URDFError, URDFWarning
+from gimwatch.model.urdf_quirks import (
+    fix_namespace,
+    fix_text_quirks,
+    fix_tree_quirks,
+    warn_quirks,
+)
 from gimwatch.model.urdf_values import (
     check_joint_values,
     check_link_values,
     warn_doubtful_inertias,
 )
 
-__all__ = ["DEFAULT_MAX_LINKS", "MAX_TAG_CHARS", "check_urdf", "max_links", "parse_urdf_xml"]
+__all__ = [
+    "DEFAULT_MAX_LINKS",
+    "MAX_ELEMENT_DEPTH",
+    "MAX_TAG_CHARS",
+    "check_urdf",
+    "check_urdf_text",
+    "max_links",
+    "parse_urdf_xml",
+    "without_comments",
+]
 
 #: Document-type declarations can define entities (external files, "billion laughs");
 #: no URDF needs them, so they are refused before any parser sees the text.
 _FORBIDDEN = ("<!DOCTYPE", "<!ENTITY")
-_COMMENT = re.compile(r"<!--.*?-->", re.DOTALL)
 #: The most <link> (and <joint>) elements read by default; ``$GIMWATCH_MAX_LINKS`` overrides
 #: it. Counted in the text before any parser runs: a 20,000-link URDF would otherwise take
 #: minutes and gigabytes of Pinocchio's and yourdfpy's time before any other limit applies.
@@ -34,6 +48,22 @@ MAX_LINKS_VARIABLE = "GIMWATCH_MAX_LINKS"
 #: quadratically, without answering Ctrl-C, on tags with 100,000 attributes.
 MAX_TAG_CHARS = 65_536
 _LONG_TAG = re.compile(f"<[^<>]{{{MAX_TAG_CHARS}}}")
+
+
+#: The deepest element nesting read: URDF needs about 6 (robot/link/visual/geometry/mesh);
+#: every recursive reader downstream (yourdfpy, ElementTree's writer) fails on 10^4.
+MAX_ELEMENT_DEPTH = 64
+
+
+def _element_depth(root: ET.Element) -> int:
+    """The nesting depth of an element tree, without recursion."""
+    deepest, stack = 0, [(root, 1)]
+    while stack:
+        element, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if depth <= MAX_ELEMENT_DEPTH:  # deeper is refused anyway: stop counting there
+            stack.extend((child, depth + 1) for child in element)
+    return deepest
 
 
 def max_links() -> int:
@@ -64,15 +94,40 @@ def _check_budget(xml: str, source: str) -> None:
         )
 
 
+def without_comments(xml: str) -> str:
+    """The text with its comments removed, by one linear scan.
+
+    (``re.sub(r"<!--.*?-->", ...)`` rescans the rest of the text from every unclosed
+    ``<!--``: quadratic, minutes for a file of them.) An unclosed comment runs to the end.
+    """
+    pieces, position = [], 0
+    while True:
+        start = xml.find("<!--", position)
+        if start < 0:
+            pieces.append(xml[position:])
+            return "".join(pieces)
+        pieces.append(xml[position:start])
+        end = xml.find("-->", start + 4)
+        if end < 0:
+            return "".join(pieces)
+        position = end + 3
+
+
 def parse_urdf_xml(xml: str, source: str) -> ET.Element:
-    """Parse URDF text safely and return its ``<robot>`` element.
+    """Parse URDF text safely and return its ``<robot>`` element."""
+    return _parse(xml, source)[0]
+
+
+def _parse(xml: str, source: str) -> tuple[ET.Element, list[str]]:
+    """The ``<robot>`` element and the text quirks fixed on the way (see urdf_quirks).
 
     Comments are set aside first: a comment may mention ``<!DOCTYPE`` or be megabytes long
     without counting against the file.
     """
     if not xml.strip():
         raise URDFError(source, "the file is empty")
-    text = _COMMENT.sub("", xml)
+    xml, fixes = fix_text_quirks(xml)
+    text = without_comments(xml)
     head = text.upper()
     for token in _FORBIDDEN:
         if token in head:
@@ -82,15 +137,23 @@ def parse_urdf_xml(xml: str, source: str) -> ET.Element:
         root = ET.fromstring(xml)
     except ET.ParseError as exc:
         raise URDFError(source, f"malformed XML ({exc})") from exc
+    depth = _element_depth(root)
+    if depth > MAX_ELEMENT_DEPTH:
+        raise URDFError(
+            source,
+            f"has elements nested {depth} deep, more than the {MAX_ELEMENT_DEPTH} read "
+            "(a URDF needs about 6)",
+        )
+    fixes += fix_namespace(root)
     if root.tag != "robot":
         raise URDFError(source, f"the root element must be <robot>, got <{root.tag}>")
-    return root
+    return root, fixes
 
 
 def check_urdf(xml: str, source: str) -> ET.Element:
     """Check the structure of URDF text and return its ``<robot>`` element.
 
-    Then every value urdfdom reads is checked (see :mod:`gimwatch.model.urdf_values`).
+    Then every value urdfdom reads is checked (see `gimwatch.model.urdf_values`).
 
     Raises:
         URDFError: The text is not well-formed XML, not a URDF, its links and joints do
@@ -100,7 +163,18 @@ def check_urdf(xml: str, source: str) -> ET.Element:
         URDFWarning: Once per file, naming the links whose principal moments of inertia
             violate the triangle inequality.
     """
-    root = parse_urdf_xml(xml, source)
+    return check_urdf_text(xml, source, stacklevel=2)[0]
+
+
+def check_urdf_text(xml: str, source: str, *, stacklevel: int = 1) -> tuple[ET.Element, str]:
+    """`check_urdf`, and the text for parsers.
+
+    That is ``xml`` itself or, when real-world conventions were normalised
+    (`gimwatch.model.urdf_quirks`, one warning), the normalised document, so that
+    Pinocchio, DeNOC and MuJoCo read the same robot.
+    """
+    root, fixes = _parse(xml, source)
+    fixes += fix_tree_quirks(root, source)
     links = [link.get("name") for link in root.findall("link")]
     if not links:
         raise URDFError(source, "the robot has no <link>")
@@ -156,15 +230,17 @@ def check_urdf(xml: str, source: str) -> ET.Element:
     for joint in root.findall("joint"):
         check_joint_values(joint, source)
     _check_mimics(root, source)
-    warn_doubtful_inertias(source, doubtful, kind="link", stacklevel=2)
-    return root
+    warn_quirks(source, fixes, stacklevel=stacklevel + 1)
+    warn_doubtful_inertias(source, doubtful, kind="link", stacklevel=stacklevel + 1)
+    return root, (ET.tostring(root, encoding="unicode") if fixes else xml)
 
 
 def _check_mimics(root: ET.Element, source: str) -> None:
     """A mimic joint follows another moving joint, not itself, and not in a cycle.
 
-    A mimic naming a joint the file does not have is a :class:`URDFWarning` (real robots
-    ship such files when a hand is cut from its arm); Pinocchio then moves the joint freely.
+    A mimic naming a joint the file does not have is a [`URDFWarning`][gimwatch.errors.URDFWarning]
+    (real robots ship such files when a hand is cut from its arm); Pinocchio then moves the joint
+    freely.
     """
     kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
     follows: dict[str, str] = {}
@@ -180,13 +256,8 @@ def _check_mimics(root: ET.Element, source: str) -> None:
         if target not in kinds:
             ghosts.append(f"{name} -> {target}")
             continue
-        if kinds[target] == "fixed":
-            raise URDFError(
-                source,
-                f"<mimic> names the fixed joint {target!r}, which never moves",
-                element=where,
-            )
-        follows[name] = target
+        if kinds[target] != "fixed":  # a mimic of a fixed joint is a quirk (urdf_quirks)
+            follows[name] = target
     for start in follows:
         path, joint = [start], follows[start]
         while joint in follows and joint not in path:

@@ -4,7 +4,7 @@ urdfdom (Pinocchio's parser) prints its complaints to stderr and, for several of
 builds a model from what it could read: a mass of ``nan`` or ``abc`` silently becomes a
 massless body, a zero joint axis a joint that moves nothing, a negative mass a GIM of
 -1e62. This module reads every value urdfdom would read and raises a one-line
-:class:`~gimwatch.errors.URDFError` naming the file, the link or joint, and the value.
+[`URDFError`][gimwatch.errors.URDFError] naming the file, the link or joint, and the value.
 
 What real robots do is the yardstick (measured on the 71 URDFs of example-robot-data):
 
@@ -13,7 +13,7 @@ What real robots do is the yardstick (measured on the 71 URDFs of example-robot-
   INERTIA_RTOL * largest moment)`` are errors;
 * principal moments that violate the triangle inequality (a + b >= c, required of any
   mass distribution) appear in 16 robots (ANYmal, Go1, Allegro, ...): Pinocchio computes a
-  positive definite GIM from them, so they are a :class:`~gimwatch.errors.URDFWarning`;
+  positive definite GIM from them, so they are a [`URDFWarning`][gimwatch.errors.URDFWarning];
 * zero masses and zero inertias are common (frames, sensors) and left alone; a moving
   joint that carries no mass at all is reported when the GIM is computed (it is singular).
 
@@ -60,7 +60,11 @@ MAX_MAGNITUDE = 1e15
 #: A joint axis is normalised by its length; components of magnitude outside this range
 #: make that length overflow (1e200) or underflow (1e-300) in double precision.
 AXIS_RANGE = (1e-100, 1e100)
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf|infinity)", re.I)
+#: A number as urdfdom reads one; unambiguous (``\d+(?:\.\d*)?``, not ``\d+\.?\d*``) so that a
+#: failing match backtracks in linear, not quadratic, time on a 65,536-digit attribute.
+_NUMBER = re.compile(
+    r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:nan|inf|infinity)", re.I
+)
 _GEOMETRY = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",)}
 
 
@@ -77,7 +81,12 @@ def _floats(
     parts = (text or "").split()
     if len(parts) != count or not all(_NUMBER.fullmatch(p) for p in parts):
         rule = "a number" if count == 1 else f"{count} numbers separated by spaces"
-        raise URDFError(source, f"{what} must be {rule}, got {text!r}", element=where)
+        hint = (
+            " (an unexpanded xacro or roslaunch expression: run xacro on the file first)"
+            if "$(" in (text or "") or "${" in (text or "")
+            else ""
+        )
+        raise URDFError(source, f"{what} must be {rule}, got {text!r}{hint}", element=where)
     values = [float(p) for p in parts]
     if not all(math.isfinite(v) for v in values):
         raise URDFError(source, f"{what} must be finite, got {text!r}", element=where)
@@ -208,7 +217,7 @@ def check_principal_moments(moments: np.ndarray, *, source: str, where: str) -> 
 
 
 def warn_doubtful_inertias(source: str, names: list[str], *, kind: str, stacklevel: int) -> None:
-    """Issue one :class:`~gimwatch.errors.URDFWarning` naming the doubtful bodies.
+    """Issue one [`URDFWarning`][gimwatch.errors.URDFWarning] naming the doubtful bodies.
 
     ``names`` are the links or bodies (``kind``) whose principal moments of inertia violate
     the triangle inequality; nothing is issued when there are none.

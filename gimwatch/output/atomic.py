@@ -142,7 +142,7 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
 
 
 def prepare_directory(path: str | Path) -> Path:
-    """Create the folder ``path`` (and its parents) or raise :class:`OutputError`."""
+    """Create the folder ``path`` (and its parents) or raise `OutputError`."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputError(str(path), "is a file, not a folder; give a folder name")

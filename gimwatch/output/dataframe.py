@@ -1,7 +1,7 @@
 """Results as pandas DataFrames (``pip install 'gimwatch[pandas]'``).
 
 pandas is optional: it is imported when a ``to_dataframe()`` is called, and its absence is
-an :class:`~gimwatch.errors.InputError` that says how to install it. Column names follow the
+an [`InputError`][gimwatch.errors.InputError] that says how to install it. Column names follow the
 CSV files of a results folder (``trajectory.csv``: ``t``, ``q:<name>``, ``v:<name>``;
 ``watch.csv``: the metric names), so a DataFrame and a CSV read back agree.
 """
@@ -52,7 +52,7 @@ def trajectory_frame(
 
     Watched metrics sampled at the same times as the state (``watch_t`` equal to ``t``) become
     columns named after the metric; vector metrics (eigenvalues, diagonal) are spread into
-    ``<metric>:<k>``. A watch sampled on other times is left out (see :func:`watch_frame`).
+    ``<metric>:<k>``. A watch sampled on other times is left out (see `watch_frame`).
     """
     pandas = require_pandas()
     columns: dict[str, np.ndarray] = {"t": np.asarray(t)}

@@ -21,6 +21,7 @@ __all__ = [
     "plot_kappa_and_delta",
     "plot_kappa_and_scaled",
     "plot_pivot_ratios",
+    "plot_watch",
 ]
 
 
@@ -37,6 +38,11 @@ def _axes(ax):
 
         _, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     return ax
+
+
+def _legend_beside(ax, **options) -> None:
+    """The legend to the right of the axes, off the data (many series would cover it)."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **options)
 
 
 def _series(ax, t, values, labels, *, plot=None, style="-"):
@@ -61,7 +67,7 @@ def _series(ax, t, values, labels, *, plot=None, style="-"):
 def plot_eigenvalues(t: npt.ArrayLike, eigenvalues: npt.ArrayLike, *, ax=None):
     """λ_i(M) over time (Fig. 2a), largest first in the legend, log scale.
 
-    More than :data:`MAX_LINES` eigenvalues are drawn as their envelope plus λmax, the
+    More than `MAX_LINES` eigenvalues are drawn as their envelope plus λmax, the
     middle one and λmin.
     """
     ax = _axes(ax)
@@ -69,22 +75,30 @@ def plot_eigenvalues(t: npt.ArrayLike, eigenvalues: npt.ArrayLike, *, ax=None):
     labels = [f"λ{i + 1}" for i in range(values.shape[1])]
     _series(ax, t, values, labels, plot=ax.semilogy)
     ax.set(xlabel="time [s]", ylabel="eigenvalue of M [kg·m²]", title="Eigenvalues of the GIM")
-    ax.legend(fontsize="small", ncols=2)
+    _legend_beside(ax, fontsize="small")
     return ax
 
 
 def plot_diagonal(t: npt.ArrayLike, diagonal: npt.ArrayLike, *, names=None, ax=None):
-    """M_ii over time (Fig. 2b), log scale, labelled by joint name when given."""
+    """M_ii over time (Fig. 2b), log scale, each line named by its joint (velocity coordinate).
+
+    ``names`` are the robot's velocity-coordinate names (`Robot.dof_names`, one per M_ii);
+    without them the lines are M_11, M_22, ...
+    """
     ax = _axes(ax)
     values = np.asarray(diagonal)
+    if names is not None and len(names) != values.shape[1]:
+        raise ValueError(f"{len(names)} names for {values.shape[1]} diagonal elements")
     labels = (
-        list(names) if names is not None else [f"M{i + 1},{i + 1}" for i in range(values.shape[1])]
+        [f"M_ii of {n}" for n in names]
+        if names is not None
+        else [f"M_{i + 1}{i + 1}" for i in range(values.shape[1])]
     )
     _series(ax, t, values, labels, plot=ax.semilogy)
     ax.set(
         xlabel="time [s]", ylabel="diagonal element M_ii [kg·m² or kg]", title="Diagonal elements"
     )
-    ax.legend(fontsize="small", ncols=2)
+    _legend_beside(ax, fontsize="small")
     return ax
 
 
@@ -200,7 +214,7 @@ def plot_joint_angles(t: npt.ArrayLike, q: npt.ArrayLike, *, names=None, units=N
         q: Joint coordinates, shape (K, nq).
         names: Coordinate names (default q1, q2, ...).
         units: Unit of each coordinate, "rad", "m" or "-" (default all "rad");
-            :func:`joint_coordinate_units` gives both from a Pinocchio model.
+            `joint_coordinate_units` gives both from a Pinocchio model.
         ax: Axes to draw on (a new figure's when None).
     """
     ax = _axes(ax)
@@ -221,7 +235,36 @@ def plot_joint_angles(t: npt.ArrayLike, q: npt.ArrayLike, *, names=None, units=N
         else f"joint coordinate: {ylabel}",
         title=f"Joint coordinates ({q.shape[1]})",
     )
-    ax.legend(fontsize="small", ncols=2)
+    _legend_beside(ax, fontsize="small")
+    return ax
+
+
+def plot_watch(
+    t: npt.ArrayLike,
+    series: dict[str, npt.ArrayLike],
+    *,
+    alarm_metric: str | None = None,
+    threshold: float | None = None,
+    ax=None,
+):
+    """Watched scalar metrics over time on one log axis, with the alarm threshold (`Watch.plot`).
+
+    Args:
+        t: Sample times (s), shape (K,).
+        series: Metric name -> values, shape (K,) each (condition-number scale, [-]).
+        alarm_metric: The metric the threshold applies to (named in the legend).
+        threshold: The alarm threshold, drawn as a dotted line; None: no line.
+        ax: Axes to draw on (a new figure's when None).
+    """
+    ax = _axes(ax)
+    for name, values in series.items():
+        ax.semilogy(t, values, label=name)
+    if threshold is not None:
+        ax.axhline(
+            threshold, color="C3", lw=0.8, ls=":", label=f"alarm: {alarm_metric} > {threshold:.3g}"
+        )
+    ax.set(xlabel="time [s]", ylabel="metric value [-]", title="Watched conditioning metrics")
+    ax.legend(fontsize="small")
     return ax
 
 
@@ -258,9 +301,10 @@ def animate_chain(
     ax = fig.subplots()
     reach = np.abs(points).max() * 1.05
     ax.set(xlim=(-reach, reach), ylim=(-reach, reach * 0.3), aspect="equal")
-    ax.set(xlabel="x [m]", ylabel="y [m]", title=title)
+    ax.set(xlabel="x [m]", ylabel="y [m]")
+    fig.suptitle(title)  # the figure's title; the changing text sits between it and the axes
     (line,) = ax.plot([], [], "o-", lw=3, ms=3)
-    label = ax.text(0.02, 0.95, "", transform=ax.transAxes)
+    label = ax.text(0.5, 1.02, "", transform=ax.transAxes, ha="center", va="bottom")
     fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="κ₂ [-]", shrink=0.6)
 
     def draw(k):
@@ -269,4 +313,5 @@ def animate_chain(
         label.set_text(f"t = {t[k]:.2f} s   κ₂ = {kappa[k]:.3g}")
         return line, label
 
-    return FuncAnimation(fig, draw, frames=len(points), blit=True)
+    # no blitting: the text is outside the axes, which a blit would not redraw
+    return FuncAnimation(fig, draw, frames=len(points), blit=False)

@@ -1,15 +1,15 @@
 """Results folders that never destroy what gimwatch did not write.
 
-A results folder holds a marker file, :data:`MARKER`, naming the command that wrote it and
-the entries it wrote. :class:`ResultsFolder` writes one:
+A results folder holds a marker file, `MARKER`, naming the command that wrote it and
+the entries it wrote. `ResultsFolder` writes one:
 
 1. the target is checked: absent, empty, or a folder holding the marker; anything else (a
    folder of the user's files, a regular file, a device, a FIFO) is refused with an
-   :class:`~gimwatch.errors.OutputError`, before any work;
+   [`OutputError`][gimwatch.errors.OutputError], before any work;
 2. a lock (``fcntl.flock`` on ``.NAME.gimwatch-lock`` beside the folder) makes a second
    writer of the same folder refuse at once instead of mixing results;
 3. the files are written into a staging folder beside the target (``.NAME.gimwatch-staging-*``);
-4. :meth:`ResultsFolder.commit` writes the marker, links into the staging folder the entries
+4. `ResultsFolder.commit` writes the marker, links into the staging folder the entries
    of the previous folder that gimwatch did not write (the user's notes, another command's
    sub-folders), then swaps the two folders in one step (``renameat2(RENAME_EXCHANGE)`` on
    Linux, two renames elsewhere) and deletes the previous one.
@@ -35,7 +35,15 @@ from types import TracebackType
 
 from gimwatch.errors import OutputError
 from gimwatch.output.atomic import describe_kind, signals_held, write_json_atomic
-from gimwatch.output.swap import LOCK, STAGING, carry, is_temporary, remove_stale, swap
+from gimwatch.output.swap import (
+    LOCK,
+    STAGING,
+    STAGING_RECORD,
+    carry,
+    mark_staging,
+    remove_stale,
+    swap,
+)
 
 __all__ = [
     "MARKER",
@@ -67,7 +75,7 @@ def _problem(exc: OSError) -> str:
 
 
 def is_results_folder(path: str | Path) -> bool:
-    """True when ``path`` is a folder holding the :data:`MARKER` file."""
+    """True when ``path`` is a folder holding the `MARKER` file."""
     marker = Path(path) / MARKER
     try:
         return stat.S_ISREG(os.lstat(marker).st_mode)
@@ -85,7 +93,7 @@ def _written_by_gimwatch(folder: Path) -> set[str]:
 
 
 def write_marker(folder: Path, writer: str, files: Iterable[str] | None = None) -> Path:
-    """Write the :data:`MARKER` of ``folder``: its writer and the entries it wrote.
+    """Write the `MARKER` of ``folder``: its writer and the entries it wrote.
 
     Args:
         folder: The folder.
@@ -127,6 +135,12 @@ def check_folder_target(path: str | Path) -> Path:
         raise OutputError(
             str(path), f"is a {describe_kind(mode)}, not a folder; give a folder name"
         )
+    if is_results_folder(target) and not mode & stat.S_IWUSR:
+        raise OutputError(
+            str(path),
+            f"is a read-only results folder (mode {stat.S_IMODE(mode):04o}): its owner "
+            "protected it; nothing was written: make it writable or give another folder",
+        )
     if not is_results_folder(target):
         try:
             empty = not any(os.scandir(target))
@@ -147,10 +161,7 @@ class _Lock:
     def __init__(self, target: Path, shown: str) -> None:
         self.path = target.parent / f".{target.name}{LOCK}"
         while True:
-            try:
-                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
-            except OSError as exc:
-                raise OutputError(shown, _problem(exc)) from exc
+            fd = self._open(shown)
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError as exc:
@@ -171,9 +182,51 @@ class _Lock:
             if same:
                 break
             os.close(fd)
-        os.ftruncate(fd, 0)
-        os.write(fd, str(os.getpid()).encode())
         self.fd = fd
+        try:
+            os.ftruncate(fd, 0)
+            os.write(fd, str(os.getpid()).encode())
+        except OSError as exc:  # a full disk: one line, and the lock file is not left behind
+            self.release()
+            raise OutputError(shown, _problem(exc)) from exc
+
+    def _open(self, shown: str) -> int:
+        """A descriptor of the lock file, never through a symbolic link.
+
+        A lock file left by a killed writer is used again only when it is one: a regular
+        file of ours with one link holding at most a pid. Anything else at that name (a link
+        aimed at another user's file, a file of the user's) is refused, never written to.
+        """
+        flags = os.O_RDWR | os.O_CLOEXEC | os.O_NOFOLLOW
+        try:
+            return os.open(self.path, flags | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            pass
+        except OSError as exc:
+            raise OutputError(shown, _problem(exc)) from exc
+        try:
+            fd = os.open(self.path, flags)
+        except FileNotFoundError:  # removed since: create it again
+            return self._open(shown)
+        except OSError as exc:
+            problem = (
+                "is a symbolic link, not a gimwatch lock; nothing was written: remove it"
+                if exc.errno == errno.ELOOP
+                else _problem(exc)
+            )
+            raise OutputError(str(self.path), problem) from exc
+        info = os.fstat(fd)
+        if not (
+            stat.S_ISREG(info.st_mode)
+            and info.st_nlink == 1
+            and info.st_uid == os.geteuid()
+            and info.st_size <= 32
+        ):
+            os.close(fd)
+            raise OutputError(
+                str(self.path), "is not a gimwatch lock file; nothing was written: remove it"
+            )
+        return fd
 
     def release(self) -> None:
         """Remove the lock file, then unlock (in this order: see the loop above)."""
@@ -269,7 +322,7 @@ class Reservation:
 
 
 class ResultsFolder(Reservation):
-    """Write a results folder through a staging folder; :meth:`commit` puts it in place.
+    """Write a results folder through a staging folder; `commit` puts it in place.
 
     Example::
 
@@ -296,6 +349,7 @@ class ResultsFolder(Reservation):
             with signals_held():
                 prefix = f".{self.target.name}{STAGING}"
                 self.staging = Path(tempfile.mkdtemp(prefix=prefix, dir=self.target.parent))
+                mark_staging(self.staging)
             remove_stale(self.target, keep=self.staging)
         except BaseException as exc:  # a signal delivered on leaving signals_held, included
             self.__exit__(type(exc), exc, exc.__traceback__)  # raises OutputError for OSError
@@ -329,13 +383,14 @@ class ResultsFolder(Reservation):
         _phase("write")
         try:
             os.chmod(self.staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
+            (self.staging / STAGING_RECORD).unlink()  # from here on, it is the results
             written = {p.name for p in self.staging.iterdir()} - {MARKER}
             previous = self.target if self.target.is_dir() else None
             ours = _written_by_gimwatch(previous) if previous else set()
             carried = set()
             for entry in os.scandir(previous) if previous else ():
                 name = entry.name
-                if name in written or name == MARKER or is_temporary(name):
+                if name in written or name in (MARKER, STAGING_RECORD):
                     continue
                 if name in ours and not self.keep_previous:
                     continue
@@ -347,12 +402,25 @@ class ResultsFolder(Reservation):
                 swap(self.staging, self.target)
                 self.committed = True
                 _phase("swap")
-                shutil.rmtree(self.staging, ignore_errors=True)  # now the previous folder
+                _remove_previous(self.staging)
         except OSError as exc:
             raise OutputError(self.shown, _problem(exc)) from exc
         except OutputError as exc:  # name the folder, not its staging copy
             raise OutputError(self.shown, exc.problem) from exc
         return self.target
+
+
+def _remove_previous(folder: Path) -> None:
+    """Delete the previous results folder (now at the staging path), read-only parts too."""
+
+    def writable_again(function, path, _excinfo) -> None:  # a sub-folder made read-only
+        try:
+            os.chmod(os.path.dirname(path), stat.S_IRWXU)
+            function(path)
+        except OSError:
+            pass
+
+    shutil.rmtree(folder, onerror=writable_again)
 
 
 def _umask() -> int:

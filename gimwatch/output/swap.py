@@ -1,4 +1,4 @@
-"""Swapping a results folder into place: the steps :mod:`gimwatch.output.folders` takes.
+"""Swapping a results folder into place: the steps `gimwatch.output.folders` takes.
 
 The staging folder and the previous one are exchanged in one step where the system can
 (``renameat2(RENAME_EXCHANGE)``, Linux), else by two renames; the entries of the previous
@@ -18,7 +18,18 @@ from pathlib import Path
 
 from gimwatch.output.atomic import signals_held
 
-__all__ = ["LOCK", "OLD", "STAGING", "carry", "exchange", "is_temporary", "remove_stale", "swap"]
+__all__ = [
+    "LOCK",
+    "OLD",
+    "STAGING",
+    "STAGING_RECORD",
+    "carry",
+    "exchange",
+    "is_temporary",
+    "mark_staging",
+    "remove_stale",
+    "swap",
+]
 
 #: Name parts of the files a writer keeps beside a results folder ``NAME``:
 #: ``.NAME.gimwatch-lock``, ``.NAME.gimwatch-staging-*``, ``.NAME.gimwatch-old-*``.
@@ -26,9 +37,30 @@ LOCK, STAGING, OLD = ".gimwatch-lock", ".gimwatch-staging-", ".gimwatch-old-"
 _RENAME_EXCHANGE, _AT_FDCWD = 2, -100
 
 
-def is_temporary(name: str) -> bool:
-    """True for the lock, staging and old folders a writer keeps beside a results folder."""
-    return LOCK in name or STAGING in name or OLD in name
+#: The record a writer puts in each staging folder it creates: its own temporaries are
+#: recognised by this record, never by a name (a user's file may contain any name).
+STAGING_RECORD = ".gimwatch-staging-record"
+
+
+def is_temporary(path: Path) -> bool:
+    """True for a staging folder a gimwatch writer made (not a symlink, holding its record)."""
+    try:
+        return stat.S_ISDIR(os.lstat(path).st_mode) and stat.S_ISREG(
+            os.lstat(path / STAGING_RECORD).st_mode
+        )
+    except OSError:
+        return False
+
+
+def mark_staging(folder: Path) -> None:
+    """Write the record that makes ``folder`` a staging folder of this writer."""
+    descriptor = os.open(
+        folder / STAGING_RECORD, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o644
+    )
+    try:
+        os.write(descriptor, f"{os.getpid()}\n".encode())
+    finally:
+        os.close(descriptor)
 
 
 def carry(source: Path, destination: Path) -> None:
@@ -37,8 +69,7 @@ def carry(source: Path, destination: Path) -> None:
     if stat.S_ISDIR(mode):
         os.mkdir(destination)
         for entry in os.scandir(source):
-            if not is_temporary(entry.name):
-                carry(Path(entry.path), destination / entry.name)
+            carry(Path(entry.path), destination / entry.name)
         shutil.copystat(source, destination, follow_symlinks=False)
     elif stat.S_ISLNK(mode):
         os.symlink(os.readlink(source), destination)
@@ -74,11 +105,16 @@ def swap(staging: Path, target: Path) -> None:
     if exchange(staging, target):
         return
     old = target.parent / f".{target.name}{OLD}{secrets.token_hex(4)}"
-    os.rename(target, old)
+    mark_staging(target)  # a killed writer's moved-aside folder is then recognised as ours
     try:
-        os.rename(staging, target)
+        os.rename(target, old)
+        try:
+            os.rename(staging, target)
+        except BaseException:
+            os.rename(old, target)
+            raise
     except BaseException:
-        os.rename(old, target)
+        (target / STAGING_RECORD).unlink(missing_ok=True)  # the previous folder as it was
         raise
     os.rename(old, staging)
 
@@ -87,7 +123,10 @@ def remove_stale(target: Path, *, keep: Path) -> None:
     """Clear what a killed writer of ``target`` left (we hold its lock).
 
     Its staging folders are removed; a previous folder it had moved aside (the two-rename
-    swap) is put back when nothing took its place, else removed.
+    swap) is put back when nothing took its place, else removed. Only folders a writer made
+    are touched: a staging folder holds its record, a folder moved aside holds the staging
+    record too (swap writes it before the rename); anything else with such a name is the
+    user's and is left alone.
     """
     prefixes = (f".{target.name}{STAGING}", f".{target.name}{OLD}")
     try:
@@ -95,7 +134,8 @@ def remove_stale(target: Path, *, keep: Path) -> None:
     except OSError:
         return
     for entry in entries:
-        if not entry.name.startswith(prefixes) or Path(entry.path) == keep:
+        path = Path(entry.path)
+        if not entry.name.startswith(prefixes) or path == keep or not is_temporary(path):
             continue
         with signals_held():
             if OLD in entry.name and not os.path.lexists(target):

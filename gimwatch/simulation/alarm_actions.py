@@ -6,24 +6,23 @@
   ``rtol ← max(rtol₀ · threshold / estimate, RTOL_FLOOR)`` (atol by the same factor), at
   each sample where the metric is above the threshold and the estimate is a new maximum
   (never loosened again).
-* ``switch-backend`` — move the dynamics to :data:`MOST_ACCURATE_BACKEND` at the first alarm.
+* ``switch-backend`` — move the dynamics to `MOST_ACCURATE_BACKEND` at the first alarm.
 
-How to add an action: subclass :class:`AlarmAction`, set ``name``, check in ``__init__``
-that it can apply to the simulation (else raise its scene's error on ``watch.on_alarm``),
-implement :meth:`AlarmAction.after_sample`, decorate with :func:`register`. The scene
-schema, the CLI and the scene reference read :data:`ALARM_ACTIONS`.
+How to add an action: subclass [`AlarmAction`][gimwatch.simulation.alarm_actions.AlarmAction], set
+``name``, check in ``__init__`` that it can apply to the simulation (else raise its scene's error on
+``watch.on_alarm``), implement
+[`AlarmAction.after_sample`][gimwatch.simulation.alarm_actions.AlarmAction.after_sample], decorate
+with [`register`][gimwatch.simulation.alarm_actions.register]. The scene schema, the CLI and the
+scene reference read `ALARM_ACTIONS`.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from typing import Any, ClassVar, Protocol
 
-from gimwatch.metrics.watch import Alarm
 from gimwatch.simulation.backends import make_backend
 from gimwatch.simulation.integrators import INTEGRATORS
-
-if TYPE_CHECKING:
-    from gimwatch.simulation.simulate import Simulation
+from gimwatch.watch.watch import Alarm
 
 __all__ = [
     "ALARM_ACTIONS",
@@ -41,17 +40,33 @@ MOST_ACCURATE_BACKEND = "aba"
 RTOL_FLOOR = 1e-13
 
 
+class Simulation(Protocol):
+    """What an action reads and changes of a `gimwatch.simulation.simulate.Simulation`.
+
+    A protocol rather than an import: ``simulate`` imports this module's registry.
+    """
+
+    scene: Any
+    robot: Any
+    gravity: Any
+    watch: Any
+    integrator: Any
+    backend: Any
+    actions: list[str]
+
+
 class AlarmAction:
     """Base class of the on-alarm actions.
 
     Contract:
-        * ``name`` — the scene name (``watch.on_alarm``), unique in :data:`ALARM_ACTIONS`.
+        * ``name`` — the scene name (``watch.on_alarm``), unique in `ALARM_ACTIONS`.
         * ``__init__(simulation)`` runs when the simulation is built: check that the action
           applies (integrator, backend) and raise ``scene.error("watch.on_alarm", ...)`` if
           not; build what it needs.
-        * :meth:`after_sample` runs after every watched sample (``alarm`` is the alarm raised
-          at that sample, or None); it returns ``(status, message)`` to end the run, or None.
-          What it changed is appended to ``simulation.actions`` as one line.
+        * [`after_sample`][gimwatch.simulation.alarm_actions.AlarmAction.after_sample] runs after
+          every watched sample (``alarm`` is the alarm raised at that sample, or None); it returns
+          ``(status, message)`` to end the run, or None. What it changed is appended to
+          ``simulation.actions`` as one line.
     """
 
     name: ClassVar[str]
@@ -69,7 +84,7 @@ ALARM_ACTIONS: dict[str, type[AlarmAction]] = {}
 
 
 def register(cls: type[AlarmAction]) -> type[AlarmAction]:
-    """Class decorator: add an action to :data:`ALARM_ACTIONS` under its ``name``."""
+    """Class decorator: add an action to `ALARM_ACTIONS` under its ``name``."""
     if cls.name in ALARM_ACTIONS:
         raise ValueError(f"on_alarm action {cls.name!r} is already registered")
     ALARM_ACTIONS[cls.name] = cls
@@ -140,7 +155,7 @@ class Tighten(AlarmAction):
 
 @register
 class SwitchBackend(AlarmAction):
-    """Move the dynamics to :data:`MOST_ACCURATE_BACKEND` at the first alarm."""
+    """Move the dynamics to `MOST_ACCURATE_BACKEND` at the first alarm."""
 
     name = "switch-backend"
 

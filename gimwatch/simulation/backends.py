@@ -11,8 +11,8 @@ or zero when the scene declares no gravity: the recursions then add nothing for 
 
 A backend is also where the watch and the energy get M(q), diag M(q) and the energy from,
 so that a long chain on ``denoc`` never builds a Pinocchio Data (its memory grows as nv³):
-above :data:`~gimwatch.model.robots.DATA_NV_LIMIT` coordinates, :func:`make_backend` switches to
-``denoc`` and says so with a :class:`~gimwatch.errors.BackendWarning`.
+above `DATA_NV_LIMIT` coordinates, [`make_backend`][gimwatch.simulation.backends.make_backend]
+switches to ``denoc`` and says so with a [`BackendWarning`][gimwatch.errors.BackendWarning].
 """
 
 from __future__ import annotations

@@ -8,14 +8,17 @@ gravity term is ever formed. Effects that are not declared are not instantiated 
 * ``gravity`` — ``g(q)`` through the backend (Pinocchio's ``model.gravity``).
 * ``damping`` — viscous joint damping ``τ = -c ⊙ v``.
 * ``spring`` — joint springs ``τ = -k ⊙ (q - q_rest)``, potential ``½ Σ k (q - q_rest)²``.
-* ``torque`` — applied joint torques by a named law (:mod:`gimwatch.simulation.torque_laws`).
+* ``torque`` — applied joint torques by a named law
+  ([`gimwatch.simulation.torque_laws`][gimwatch.simulation.torque_laws]).
 * ``wrench`` — a constant wrench (force, torque) on a named link, mapped to joint space
   as ``τ = Jᵀ w`` with Pinocchio's frame Jacobian (``LOCAL`` or ``LOCAL_WORLD_ALIGNED``).
 
-How to add an effect: subclass :class:`Effect`, set ``name``, ``parameters`` and the flags,
-resolve the parameters in ``__init__`` and implement :meth:`Effect.tau` (and
-:meth:`Effect.potential_energy` when ``conservative``); decorate it with :func:`register`.
-The scene reader validates its table from ``parameters``; the scene reference lists it.
+How to add an effect: subclass [`Effect`][gimwatch.simulation.effects.Effect], set ``name``,
+``parameters`` and the flags, resolve the parameters in ``__init__`` and implement
+[`Effect.tau`][gimwatch.simulation.effects.Effect.tau] (and
+[`Effect.potential_energy`][gimwatch.simulation.effects.Effect.potential_energy] when
+``conservative``); decorate it with [`register`][gimwatch.simulation.effects.register]. The scene
+reader validates its table from ``parameters``; the scene reference lists it.
 """
 
 from __future__ import annotations
@@ -39,19 +42,23 @@ class Effect:
     """Base class: one declared effect, built once from the scene, evaluated per RHS call.
 
     Contract:
-        * ``name`` — the scene name (``[effects.<name>]``), unique in :data:`EFFECTS`.
+        * ``name`` — the scene name (``[effects.<name>]``), unique in `EFFECTS`.
         * ``parameters`` — its keys, validated by the scene reader before the robot is known.
         * ``__init__(robot, params, *, source)`` resolves them against the robot (joint names,
-          lengths) and raises :class:`~gimwatch.errors.SceneError` naming ``source`` and key.
-        * :meth:`tau` returns the generalized force (length nv) at each right-hand-side
-          evaluation — a few NumPy or Pinocchio calls, no Python loop over joints.
-        * ``conservative`` effects implement :meth:`potential_energy` (the energy check).
+          lengths) and raises [`SceneError`][gimwatch.errors.SceneError] naming ``source`` and key.
+        * [`tau`][gimwatch.simulation.effects.Effect.tau] returns the generalized force (length nv)
+          at each right-hand-side evaluation — a few NumPy or Pinocchio calls, no Python loop over
+          joints.
+        * ``conservative`` effects implement
+          [`potential_energy`][gimwatch.simulation.effects.Effect.potential_energy] (the energy
+          check).
 
     Attributes:
         name: The scene name of the effect (registry key).
         uses_velocity: Whether τ depends on v (so it is evaluated only when declared).
         conservative: Whether the effect derives from a potential (energy is then checked).
-        adds_torque: Whether :meth:`tau` contributes a generalized force.
+        adds_torque: Whether [`tau`][gimwatch.simulation.effects.Effect.tau] contributes a
+            generalized force.
     """
 
     name: ClassVar[str]
@@ -77,7 +84,7 @@ EFFECTS: dict[str, type[Effect]] = {}
 
 
 def register(cls: type[Effect]) -> type[Effect]:
-    """Class decorator: add an effect to :data:`EFFECTS` under its ``name``."""
+    """Class decorator: add an effect to `EFFECTS` under its ``name``."""
     if cls.name in EFFECTS:
         raise ValueError(f"effect {cls.name!r} is already registered")
     EFFECTS[cls.name] = cls
@@ -150,7 +157,7 @@ class Spring(Effect):
 
 @register
 class Torque(Effect):
-    """Applied joint torques by a law of :data:`~gimwatch.simulation.torque_laws.TORQUE_LAWS`."""
+    """Applied joint torques by a law of `TORQUE_LAWS`."""
 
     name = "torque"
     parameters = (
@@ -209,7 +216,8 @@ class Wrench(Effect):
 class CallableTorque(Effect):
     """A Python torque law ``tau(t, q, v)`` handed to ``run_scene`` (not a scene key).
 
-    Its result is checked at every call (:class:`~gimwatch.simulation.torque_laws.CallableLaw`).
+    Its result is checked at every call
+    ([`CallableLaw`][gimwatch.simulation.torque_laws.CallableLaw]).
     """
 
     name = "torque_law"

@@ -2,22 +2,26 @@
 
 Adaptive (SciPy's ``RK45``, ``DOP853``, ``Radau``, ``LSODA``; ``rtol``/``atol``) and
 fixed-step (``RK4``, ``semi-implicit-euler``; ``dt``) methods share one interface:
-:meth:`Integrator.run` takes the :class:`Problem` to solve (the simulation), a ``record``
-callback for the sample times and a ``progress`` callback between steps, and returns the
-outcome ``(status, message)``. Either callback stops the run by *returning* a value:
-``record`` a ``(status, message)`` pair, ``progress`` a message (status ``stopped``).
+[`Integrator.run`][gimwatch.simulation.integrators.Integrator.run] takes the
+[`Problem`][gimwatch.simulation.integrators.Problem] to solve (the simulation), a ``record``
+callback for the sample times and a ``progress`` callback between steps, and returns the outcome
+``(status, message)``. Either callback stops the run by *returning* a value: ``record`` a ``(status,
+message)`` pair, ``progress`` a message (status ``stopped``).
 
 Every method integrates on the configuration manifold
-(:mod:`gimwatch.simulation.local_coordinates`): for nq = nv the state is (q, v) itself;
-otherwise (continuous joints, floating base) it is (Δq, v) around an anchor. The adaptive
-methods then run piecewise between sample times — a new solver per piece, re-anchored at
-each sample (and within a piece when ‖Δq‖∞ exceeds :data:`REANCHOR_NORM`) — and the
+([`gimwatch.simulation.local_coordinates`][gimwatch.simulation.local_coordinates]): for nq = nv the
+state is (q, v) itself; otherwise (continuous joints, floating base) it is (Δq, v) around an anchor.
+The adaptive methods then run piecewise between sample times — a new solver per piece, re-anchored
+at each sample (and within a piece when ‖Δq‖∞ exceeds `REANCHOR_NORM`) — and the
 fixed-step methods re-anchor at every step.
 
-How to add an integrator: subclass :class:`FixedStepIntegrator` and implement
-:meth:`FixedStepIntegrator.step` (or :class:`ScipyIntegrator` and set ``solver``, any
-:class:`scipy.integrate.OdeSolver`), give it a ``name``, decorate it with :func:`register`.
-The scene schema, ``simulate --help`` and the scene reference read :data:`INTEGRATORS`.
+How to add an integrator: subclass
+[`FixedStepIntegrator`][gimwatch.simulation.integrators.FixedStepIntegrator] and implement
+[`FixedStepIntegrator.step`][gimwatch.simulation.integrators.FixedStepIntegrator.step] (or
+[`ScipyIntegrator`][gimwatch.simulation.integrators.ScipyIntegrator] and set ``solver``, any
+`scipy.integrate.OdeSolver`), give it a ``name``, decorate it with
+[`register`][gimwatch.simulation.integrators.register]. The scene schema, ``simulate --help`` and
+the scene reference read `INTEGRATORS`.
 """
 
 from __future__ import annotations
@@ -87,18 +91,20 @@ class Integrator:
     """Base class of the integrators.
 
     Contract:
-        * ``name`` — the scene name (``[integrator] method``), unique in :data:`INTEGRATORS`.
+        * ``name`` — the scene name (``[integrator] method``), unique in `INTEGRATORS`.
         * ``fixed_step`` — True: the scene gives ``dt`` (and no rtol/atol/max_step);
           False: ``rtol``, ``atol``, ``max_step``.
         * ``tightenable`` — whether ``on_alarm = "tighten"`` may lower its tolerances between
-          steps (:meth:`current_rtol`, :meth:`set_tolerances`).
+          steps ([`current_rtol`][gimwatch.simulation.integrators.Integrator.current_rtol],
+          [`set_tolerances`][gimwatch.simulation.integrators.Integrator.set_tolerances]).
         * ``__init__(spec)`` takes the scene's ``IntegratorSpec``.
-        * :meth:`run` integrates from t = 0 to ``problem.duration_s``, calls ``record(t, q, v)``
-          at every sample time after t = 0 and ``progress(fraction)`` between steps, counts
-          :attr:`steps`, and returns ``(status, message)``: ``("completed", "")``, what
-          ``record`` returned, ``("stopped", message)`` when ``progress`` returned a message,
-          ``("diverged", why)`` on a non-finite state or a collapsing step, ``("failed", why)``
-          (the step budget ``spec.max_steps`` spent, among others).
+        * [`run`][gimwatch.simulation.integrators.Integrator.run] integrates from t = 0 to
+          ``problem.duration_s``, calls ``record(t, q, v)`` at every sample time after t = 0 and
+          ``progress(fraction)`` between steps, counts `steps`, and returns ``(status, message)``:
+          ``("completed", "")``, what ``record`` returned, ``("stopped", message)`` when
+          ``progress`` returned a message, ``("diverged", why)`` on a non-finite state or a
+          collapsing step, ``("failed", why)`` (the step budget ``spec.max_steps`` spent, among
+          others).
     """
 
     name: ClassVar[str]
@@ -129,7 +135,7 @@ INTEGRATORS: dict[str, type[Integrator]] = {}
 
 
 def register(cls: type[Integrator]) -> type[Integrator]:
-    """Class decorator: add an integrator to :data:`INTEGRATORS` under its ``name``."""
+    """Class decorator: add an integrator to `INTEGRATORS` under its ``name``."""
     if cls.name in INTEGRATORS:
         raise ValueError(f"integrator {cls.name!r} is already registered")
     INTEGRATORS[cls.name] = cls
@@ -138,7 +144,7 @@ def register(cls: type[Integrator]) -> type[Integrator]:
 
 # -- adaptive (SciPy) -------------------------------------------------------------------
 class ScipyIntegrator(Integrator):
-    """A SciPy :class:`~scipy.integrate.OdeSolver` driven step by step.
+    """A SciPy `OdeSolver` driven step by step.
 
     Samples come from the solver's dense output (Euclidean q) or are the ends of the pieces
     (manifold q); ``progress`` runs between steps.
@@ -236,7 +242,7 @@ class ScipyIntegrator(Integrator):
         """Manifold q: state (Δq, v) around an anchor; a new solver per piece.
 
         Pieces end at the sample times (and at the duration); the anchor moves to the
-        piece's end configuration, or mid-piece when ‖Δq‖∞ > :data:`REANCHOR_NORM`.
+        piece's end configuration, or mid-piece when ‖Δq‖∞ > `REANCHOR_NORM`.
         """
         chart, duration = problem.chart, problem.duration_s
         nv = problem.v0.size
@@ -319,7 +325,7 @@ class FixedStepIntegrator(Integrator):
         raise NotImplementedError
 
     def run(self, problem: Problem, record: Record, progress: Progress = None) -> Outcome:
-        """Take round(duration / dt) steps; see :class:`Integrator`."""
+        """Take round(duration / dt) steps; see `Integrator`."""
         dt = self.spec.dt
         n_steps = round(problem.duration_s / dt)
         if n_steps > self.max_steps:  # a scene refuses it; a spec built in Python may not

@@ -3,8 +3,8 @@
 Velocity-space values (``v``, damping, stiffness, gains, torques) have one entry per
 velocity coordinate (nv); configuration-space values (``q``, spring rest, PD target) are
 written in user coordinates (continuous joints by angle, see
-:mod:`gimwatch.model.configuration`). Errors are :class:`~gimwatch.errors.SceneError`
-naming the scene file, the key and the joint.
+[`gimwatch.model.configuration`][gimwatch.model.configuration]). Errors are
+[`SceneError`][gimwatch.errors.SceneError] naming the scene file, the key and the joint.
 """
 
 from __future__ import annotations

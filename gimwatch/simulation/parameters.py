@@ -1,10 +1,10 @@
 """Declared parameters: what an effect or a torque law reads from its scene table.
 
-Each effect (:mod:`gimwatch.simulation.effects`) and torque law
-(:mod:`gimwatch.simulation.torque_laws`) lists its parameters as :class:`Parameter`
-records; the scene reader (:mod:`gimwatch.simulation.scene`) validates a table against
-them and the scene reference (``docs/scenes.md``) is generated from them, so a new effect
-or law declares its keys in one place.
+Each effect ([`gimwatch.simulation.effects`][gimwatch.simulation.effects]) and torque law
+([`gimwatch.simulation.torque_laws`][gimwatch.simulation.torque_laws]) lists its parameters as
+`Parameter` records; the scene reader ([`gimwatch.simulation.scene`][gimwatch.simulation.scene])
+validates a table against them and the scene reference (``docs/scenes.md``) is generated from them,
+so a new effect or law declares its keys in one place.
 """
 
 from __future__ import annotations

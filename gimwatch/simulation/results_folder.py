@@ -10,7 +10,7 @@ Layout of ``DIR``::
     *.png            joint coordinates, watched metrics, energy drift
 
 plus the marker ``.gimwatch-results.json``. The folder is built beside ``DIR`` and swapped
-into place (:mod:`gimwatch.output.folders`), so a failed or interrupted write never leaves a
+into place (`gimwatch.output.folders`), so a failed or interrupted write never leaves a
 half-written folder, an existing good result is replaced only by a complete one, and a folder
 of other files is never replaced.
 """
@@ -164,7 +164,9 @@ def _plots(trajectory: Trajectory, folder: Path) -> None:
             lambda ax: plots.plot_eigenvalues(wt, watch["watch_eigenvalues"], ax=ax),
         )
     if "watch_diagonal" in watch:
-        save("diagonal.png", lambda ax: plots.plot_diagonal(wt, watch["watch_diagonal"], ax=ax))
+        diagonal = watch["watch_diagonal"]
+        names = trajectory.dof_names if len(trajectory.dof_names) == diagonal.shape[1] else None
+        save("diagonal.png", lambda ax: plots.plot_diagonal(wt, diagonal, names=names, ax=ax))
 
 
 def write_simulation_files(trajectory: Trajectory, folder: Path, *, plots: bool = True) -> None:

@@ -1,17 +1,17 @@
 """Scene files: what is in the world, how to integrate it and what to watch.
 
-A scene is a TOML file read with :mod:`tomllib` and validated once, into frozen
+A scene is a TOML file read with `tomllib` and validated once, into frozen
 dataclasses. Unknown keys, wrong types, wrong lengths, negative durations, unknown effect,
-metric, joint or link names are :class:`~gimwatch.errors.SceneError` naming the file and
+metric, joint or link names are [`SceneError`][gimwatch.errors.SceneError] naming the file and
 the key (``scene.toml: effects.spring.stiffness: ...``). The schema is documented in the
 docs (``docs/scenes.md``, generated from the registries). Names are looked up in the live
-registries at parse time; :data:`EFFECT_KEYS`, :data:`METRIC_NAMES` and the other tuples
+registries at parse time; `EFFECT_KEYS`, `METRIC_NAMES` and the other tuples
 are the names registered at import.
 
 Joint-indexed values (``q``, ``v``, damping, stiffness, torques, targets) are given as a
 number (broadcast to every coordinate), a list (one per coordinate) or a table keyed by
 joint name (coordinates not named keep the default). They are resolved against the robot
-by :func:`joint_vector` when the simulation is built, because the names are the robot's.
+by `joint_vector` when the simulation is built, because the names are the robot's.
 """
 
 from __future__ import annotations
@@ -22,10 +22,10 @@ from pathlib import Path
 from typing import Any
 
 from gimwatch.errors import SceneError
-from gimwatch.metrics.watch import METRICS
 from gimwatch.model.robots import path_problem
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS as BACKEND_CLASSES
+from gimwatch.simulation.bundled_scenes import missing_scene_hint, resolve_scene
 from gimwatch.simulation.effects import EFFECTS
 from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.simulation.parameters import Parameter
@@ -39,6 +39,7 @@ from gimwatch.simulation.scene_integrator import (
 from gimwatch.simulation.scene_reader import JointValues, TableReader
 from gimwatch.simulation.torque_laws import TORQUE_LAWS
 from gimwatch.suggest import did_you_mean
+from gimwatch.watch.watch import METRICS
 
 __all__ = [
     "BACKENDS",
@@ -109,7 +110,7 @@ class RobotSpec:
     """Which robot: a ``chain:N`` / example-robot-data / URDF path string, or a chain table."""
 
     spec: str
-    floating: bool = False
+    floating: bool | None = None  # None: no ``base`` key, the robot's default base
     chain: dict[str, Any] | None = None
 
 
@@ -153,12 +154,14 @@ class Scene:
         return tuple(effect.name for effect in self.effects)
 
     def error(self, key: str, problem: str) -> SceneError:
-        """A :class:`SceneError` about ``key`` in this scene's file."""
+        """A [`SceneError`][gimwatch.errors.SceneError] about ``key`` in this scene's file."""
         return SceneError(self.source, key, problem)
 
 
 def _robot(reader: TableReader, base_dir: Path | None) -> RobotSpec:
-    floating = reader.string("base", "fixed", choices=("fixed", "floating")) == "floating"
+    floating = None  # no base key: the robot's default (example-robot-data's, else fixed)
+    if "base" in reader.table:
+        floating = reader.string("base", "fixed", choices=("fixed", "floating")) == "floating"
     if "robot" not in reader.table:
         raise reader.fail("robot", "is required")
     value = reader.table["robot"]
@@ -325,15 +328,21 @@ def parse_scene(
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file (TOML).
+    """Read and validate a scene file (TOML), or a bundled scene named without a path.
+
+    ``load_scene("chain_10")`` reads the scene shipped with gimwatch
+    (``gimwatch/scenes/chain_10.toml``) when no file ``chain_10`` exists in the working folder.
 
     Raises:
         SceneError: Missing or unreadable file, TOML syntax error, or a bad key.
     """
-    path = Path(path)
+    path = resolve_scene(path)
     try:
         if not path.exists():  # also a path through a file (NotADirectoryError)
-            raise SceneError(str(path), "", path_problem(path))
+            problem = path_problem(path)
+            if problem == "no such file":
+                problem += f"; {missing_scene_hint(path)}"
+            raise SceneError(str(path), "", problem)
         if path.is_dir():
             raise SceneError(str(path), "", "is a directory, not a scene file")
         if not path.is_file():  # a FIFO or device could block forever

@@ -1,7 +1,7 @@
 """A scene's ``[integrator]`` table: the method, its tolerances or step, and the step budget.
 
-Every run has a step budget, ``[integrator] max_steps`` (default :data:`DEFAULT_MAX_STEPS`,
-at most :data:`MAX_FIXED_STEPS`): a scene whose duration needs more fixed steps (``dt``), or
+Every run has a step budget, ``[integrator] max_steps`` (default `DEFAULT_MAX_STEPS`,
+at most `MAX_FIXED_STEPS`): a scene whose duration needs more fixed steps (``dt``), or
 more steps of ``max_step``, than its budget is refused before it runs; an adaptive run that
 spends its budget (a stiff spring under RK45) stops with status ``failed`` and the samples
 so far. Tolerances are held to a range in which the solution has correct digits.

@@ -1,8 +1,8 @@
 """Typed access to a scene's TOML tables, each error a one-line ``source: key: problem``.
 
 TOML integers have no size limit: ``duration = 999...9`` (400 digits) parses, and turning it
-into a float raises :class:`OverflowError`. Every number is converted here, so such a value
-is a :class:`~gimwatch.errors.SceneError` naming the key, like any other bad value.
+into a float raises `OverflowError`. Every number is converted here, so such a value
+is a [`SceneError`][gimwatch.errors.SceneError] naming the key, like any other bad value.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ class TableReader:
         return f"{self.prefix}{name}"
 
     def fail(self, name: str, problem: str) -> SceneError:
-        """The :class:`SceneError` about ``name`` in this table."""
+        """The [`SceneError`][gimwatch.errors.SceneError] about ``name`` in this table."""
         return SceneError(self.source, self.key(name), problem)
 
     def check_keys(self, allowed: set[str] | tuple[str, ...], required: tuple[str, ...] = ()):

@@ -1,6 +1,6 @@
 """The scene reference (``docs/scenes.md``), generated from the live registries.
 
-:func:`scene_reference` writes the tables of the reference's generated part: effects and
+`scene_reference` writes the tables of the reference's generated part: effects and
 their keys, torque laws and theirs, integrators, backends, on-alarm actions and metrics,
 each from its registry, so the page lists exactly what the scene reader accepts
 (``tests/test_scene_reference.py`` regenerates it and compares).
@@ -11,24 +11,26 @@ from __future__ import annotations
 import inspect
 import re
 
-from gimwatch.metrics.watch import METRICS
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS
 from gimwatch.simulation.effects import EFFECTS
 from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.simulation.parameters import Parameter
 from gimwatch.simulation.torque_laws import TORQUE_LAWS
+from gimwatch.watch.watch import METRICS
 
 __all__ = ["scene_reference"]
 
 
-_ROLE = re.compile(r":\w+:`~?(?:[\w.]+\.)?([^`]+)`")
+#: A cross-reference: mkdocstrings' ([`x`][gimwatch.a.x]) or a Sphinx role (class, func, ...).
+_ROLE = re.compile(r"\[`([^`]+)`\]\[[\w.]*\]|:\w+:`~?(?:[\w.]+\.)?([^`]+)`")
 
 
 def _summary(cls: type) -> str:
     """The first paragraph of a class docstring, reST literals turned into Markdown."""
     doc = (inspect.getdoc(cls) or "").split("\n\n")[0].replace("\n", " ")
-    return _ROLE.sub(r"`\1`", doc).replace("``", "`").replace("|", "\\|")
+    doc = _ROLE.sub(lambda m: f"`{m.group(1) or m.group(2)}`", doc)
+    return doc.replace("``", "`").replace("|", "\\|")
 
 
 def _parameter_rows(parameters: tuple[Parameter, ...]) -> list[str]:

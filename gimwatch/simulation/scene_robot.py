@@ -2,9 +2,10 @@
 
 A robot with a joint that moves no mass is refused here, naming the URDF and the joint.
 
-Loading failures become a :class:`~gimwatch.errors.SceneError` on key ``robot``; q is read
+Loading failures become a [`SceneError`][gimwatch.errors.SceneError] on key ``robot``; q is read
 in user coordinates (continuous joints by angle, ``q = 0.0``: every angle zero and the
-neutral base; see :mod:`gimwatch.model.configuration`), v in velocity coordinates.
+neutral base; see [`gimwatch.model.configuration`][gimwatch.model.configuration]), v in velocity
+coordinates.
 """
 
 from __future__ import annotations
@@ -42,10 +43,10 @@ def _chain_robot(params: dict, floating: bool) -> Robot:
 
 
 def load_scene_robot(scene) -> Robot:
-    """Load the scene's robot; failures become a :class:`SceneError` on key ``robot``."""
+    """Load the scene's robot; failures become a `SceneError` on key ``robot``."""
     try:
         if scene.robot.chain is not None:
-            return _chain_robot(scene.robot.chain, scene.robot.floating)
+            return _chain_robot(scene.robot.chain, bool(scene.robot.floating))
         floating = scene.robot.floating
         return load_robot(
             scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None

@@ -1,15 +1,15 @@
 """Simulate a scene: declared effects + a dynamics backend + an integrator, watched at samples.
 
-:class:`Simulation` owns the right-hand side and the sampling loop only; what it composes
-lives in its own module, each a registry the scene schema reads:
+[`Simulation`][gimwatch.simulation.simulate.Simulation] owns the right-hand side and the sampling
+loop only; what it composes lives in its own module, each a registry the scene schema reads:
 
-* the robot and the initial state — :mod:`gimwatch.simulation.scene_robot`;
-* effects and torque laws — :mod:`~gimwatch.simulation.effects`,
-  :mod:`~gimwatch.simulation.torque_laws` (or a Python callable ``torque_law``);
-* forward dynamics — :mod:`~gimwatch.simulation.backends`;
-* integrators — :mod:`~gimwatch.simulation.integrators` (on the configuration manifold,
-  :mod:`~gimwatch.simulation.local_coordinates`);
-* what an alarm does — :mod:`~gimwatch.simulation.alarm_actions`.
+* the robot and the initial state — `gimwatch.simulation.scene_robot`;
+* effects and torque laws — [`effects`][gimwatch.simulation.effects],
+  [`torque_laws`][gimwatch.simulation.torque_laws] (or a Python callable ``torque_law``);
+* forward dynamics — [`backends`][gimwatch.simulation.backends];
+* integrators — [`integrators`][gimwatch.simulation.integrators] (on the configuration manifold,
+  [`local_coordinates`][gimwatch.simulation.local_coordinates]);
+* what an alarm does — [`alarm_actions`][gimwatch.simulation.alarm_actions].
 
 One right-hand-side evaluation is ``a = FD(q, v, Σ τ_e(t, q, v))``: the sum runs over the
 *declared* torque effects only (none declared: a constant zero vector), and FD is one call
@@ -17,7 +17,7 @@ into the backend (Pinocchio's C++ recursions for ``aba`` and ``crba-cholesky``),
 no Python loop over joints. The watch and the energy are evaluated at the sample times
 only, never inside the right-hand side.
 
-A run ends with a status of :data:`~gimwatch.simulation.trajectory.STATUSES`, never by an
+A run ends with a status of `STATUSES`, never by an
 exception: ``record`` (an alarm action) and the ``progress`` callback stop it by returning
 a value; a non-finite acceleration, state or a collapsing step is ``diverged`` with the
 time and the cause, the samples up to that point kept; Ctrl-C is ``interrupted``.
@@ -30,7 +30,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.robots import Robot
 from gimwatch.simulation.alarm_actions import (
     ALARM_ACTIONS,
@@ -44,6 +43,7 @@ from gimwatch.simulation.local_coordinates import LocalChart
 from gimwatch.simulation.scene import Scene
 from gimwatch.simulation.scene_robot import initial_state, load_scene_robot
 from gimwatch.simulation.trajectory import STATUSES, Trajectory
+from gimwatch.watch.watch import Watch
 
 __all__ = [
     "MIN_STEP_FRACTION",
@@ -51,7 +51,6 @@ __all__ = [
     "RTOL_FLOOR",
     "STATUSES",
     "Simulation",
-    "Trajectory",
     "load_scene_robot",
     "run_scene",
 ]
@@ -71,14 +70,15 @@ class Simulation:
     """A scene made ready to run: robot, declared effects, backend, integrator, watch.
 
     Building it validates everything that needs the robot (joint and link names, lengths,
-    unit (cos, sin) pairs and quaternions); nothing is integrated until :meth:`run`.
+    unit (cos, sin) pairs and quaternions); nothing is integrated until
+    [`run`][gimwatch.simulation.simulate.Simulation.run].
 
     Args:
         scene: The validated scene.
         robot: The scene's robot when already loaded.
         torque_law: A Python torque law ``tau(t, q, v)`` added to the declared effects; its
             result must be real, finite and of shape (nv,) (else
-            :class:`~gimwatch.simulation.torque_laws.TorqueLawError` naming the law).
+            [`TorqueLawError`][gimwatch.simulation.torque_laws.TorqueLawError] naming the law).
     """
 
     def __init__(
@@ -151,7 +151,8 @@ class Simulation:
                 ``stopped`` and that message.
 
         Returns:
-            The :class:`Trajectory` up to where the run stopped (Ctrl-C included).
+            The [`Trajectory`][gimwatch.simulation.trajectory.Trajectory] up to where the run
+            stopped (Ctrl-C included).
         """
         scene = self.scene
         ts, qs, vs, energies, kinetic = [], [], [], [], [0.0]
@@ -216,9 +217,9 @@ def run_scene(
     progress: Callable[[float], object] | None = None,
     torque_law: TorqueLawFunction | None = None,
 ) -> Trajectory:
-    """Build and run a scene (see :class:`Simulation`), optionally under a Python torque law.
+    """Build and run a scene (see `Simulation`), optionally under a Python torque law.
 
-    Example:
+    Examples:
         >>> import numpy as np
         >>> from gimwatch import parse_scene, run_scene
         >>> scene = parse_scene({"robot": "chain:2", "duration": 0.1, "sample": 0.05})

@@ -2,8 +2,8 @@
 
 A scene declares ``[effects.torque]`` with ``law = "<name>"`` and that law's parameters;
 from Python, any callable ``tau(t, q, v)`` can drive a scene
-(``run_scene(scene, torque_law=f)``), wrapped in :class:`CallableLaw`, which checks what
-it returns.
+(``run_scene(scene, torque_law=f)``), wrapped in
+[`CallableLaw`][gimwatch.simulation.torque_laws.CallableLaw], which checks what it returns.
 
 * ``constant`` — ``τ = τ₀`` (``value``).
 * ``sinusoid`` — ``τ = τ₀ + A sin(2π f t + φ)`` (``amplitude``, ``frequency_hz``,
@@ -12,11 +12,11 @@ it returns.
   is ``q* − q`` for Euclidean q and Pinocchio's ``difference(q, q*)`` otherwise (a
   continuous joint's angle error wrapped to (−π, π]).
 
-How to add a law: subclass :class:`TorqueLaw`, set :attr:`~TorqueLaw.name` and
-:attr:`~TorqueLaw.parameters` (validated by the scene reader), compute what does not
+How to add a law: subclass [`TorqueLaw`][gimwatch.simulation.torque_laws.TorqueLaw], set `name` and
+`parameters` (validated by the scene reader), compute what does not
 change in ``__init__`` and implement ``__call__``; decorate the class with
-:func:`register`. Nothing else changes: the scene schema, the CLI and the scene reference
-read :data:`TORQUE_LAWS`.
+[`register`][gimwatch.simulation.torque_laws.register]. Nothing else changes: the scene schema, the
+CLI and the scene reference read `TORQUE_LAWS`.
 """
 
 from __future__ import annotations
@@ -47,12 +47,12 @@ class TorqueLaw:
     """Base class of the torque laws: τ(t, q, v), length nv (N·m or N).
 
     Contract:
-        * ``name`` — the scene name (``law = "name"``), unique in :data:`TORQUE_LAWS`.
-        * ``parameters`` — the law's keys (:class:`~gimwatch.simulation.parameters.Parameter`);
+        * ``name`` — the scene name (``law = "name"``), unique in `TORQUE_LAWS`.
+        * ``parameters`` — the law's keys (`Parameter`);
           the scene reader refuses others and requires the ``required`` ones.
         * ``uses_velocity`` — whether τ reads v.
         * ``__init__(robot, params, *, source)`` resolves joint-indexed values against the
-          robot once (``joint_vector``), raising :class:`~gimwatch.errors.SceneError` that
+          robot once (``joint_vector``), raising [`SceneError`][gimwatch.errors.SceneError] that
           names ``source`` and the key.
         * ``__call__(t, q, v)`` is called at every right-hand-side evaluation: keep it to a few
           NumPy operations; it may return a read-only array.
@@ -84,7 +84,7 @@ TORQUE_LAWS: dict[str, type[TorqueLaw]] = {}
 
 
 def register(cls: type[TorqueLaw]) -> type[TorqueLaw]:
-    """Class decorator: add a torque law to :data:`TORQUE_LAWS` under its ``name``."""
+    """Class decorator: add a torque law to `TORQUE_LAWS` under its ``name``."""
     if cls.name in TORQUE_LAWS:
         raise ValueError(f"torque law {cls.name!r} is already registered")
     TORQUE_LAWS[cls.name] = cls
@@ -161,7 +161,8 @@ class CallableLaw:
     """A Python callable ``tau(t, q, v)`` used as a torque law; its output is checked.
 
     Every call's result must be a real, finite array of shape (nv,); anything else (and an
-    exception inside the law) is a :class:`TorqueLawError` naming the law.
+    exception inside the law) is a
+    [`TorqueLawError`][gimwatch.simulation.torque_laws.TorqueLawError] naming the law.
     """
 
     uses_velocity = True
@@ -174,11 +175,26 @@ class CallableLaw:
         self.robot_name = robot.name
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """The law's τ(t, q, v) as a float array, or :class:`TorqueLawError`."""
+        """The law's τ(t, q, v) as a float array, or `TorqueLawError`.
+
+        The law sees read-only views of q and v (no copy): writing to them would change the
+        integrator's state behind its back, so it is an error naming the law.
+        """
+        q_view, v_view = q.view(), v.view()
+        q_view.flags.writeable = v_view.flags.writeable = False
         try:
-            tau = self.law(t, q, v)
+            tau = self.law(t, q_view, v_view)
         except GimwatchError:
             raise
+        except ValueError as exc:
+            if "read-only" not in str(exc):
+                raise TorqueLawError(
+                    self.name, f"raised ValueError at t = {t:.6g} s: {exc}"
+                ) from exc
+            raise TorqueLawError(
+                self.name,
+                f"must not modify q or v (read-only; copy them first) at t = {t:.6g} s: {exc}",
+            ) from exc
         except Exception as exc:
             raise TorqueLawError(
                 self.name, f"raised {exc.__class__.__name__} at t = {t:.6g} s: {exc}"
@@ -194,7 +210,7 @@ class CallableLaw:
             raise TorqueLawError(
                 self.name, f"must return real numbers, got dtype {array.dtype} at t = {t:.6g} s"
             )
-        array = array.astype(float, copy=False)
+        array = np.array(array, dtype=float)  # a copy: τ may be q or v itself
         if not np.all(np.isfinite(array)):
             raise TorqueLawError(
                 self.name, f"must return finite values, got {array.tolist()!r} at t = {t:.6g} s"

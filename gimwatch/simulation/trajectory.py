@@ -1,4 +1,4 @@
-"""What a run computed: the :class:`Trajectory` record and the run statuses."""
+"""What a run computed: the `Trajectory` record and the run statuses."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gimwatch.errors import SimulationError
-from gimwatch.metrics.watch import Alarm
+from gimwatch.watch.watch import Alarm
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -39,7 +39,7 @@ class Trajectory:
         actions: What ``on_alarm`` did (tolerances tightened, backend switched), in time order.
         backend: The dynamics backend the run ended on (the scene's, unless the robot was too
             large for Pinocchio's Data or ``switch-backend`` acted).
-        status: One of :data:`STATUSES`.
+        status: One of `STATUSES`.
         message: Why the run stopped early ("" when completed).
         steps: Integrator steps taken.
         rhs_evaluations: Right-hand-side (forward-dynamics) evaluations.
@@ -65,6 +65,16 @@ class Trajectory:
     kinetic_peak: float = 0.0
     actions: tuple[str, ...] = field(default=())
     backend: str = ""
+
+    def __repr__(self) -> str:
+        """One line: the robot, how the run ended, its samples and what was watched."""
+        span = f"t = 0..{self.t[-1]:.4g} s" if self.t.size else "no sample"
+        watched = [k.removeprefix("watch_") for k in self.watch if k != "watch_t"]
+        return (
+            f"Trajectory(robot={self.robot!r}, status={self.status!r}, {span}, "
+            f"{self.t.size} samples, {self.steps} steps, watched={watched}, "
+            f"alarms={len(self.alarms)})"
+        )
 
     @property
     def conservative(self) -> bool:
@@ -107,6 +117,6 @@ class Trajectory:
         )
 
     def raise_for_status(self) -> None:
-        """Raise :class:`SimulationError` if the run diverged or the solver failed."""
+        """Raise `SimulationError` if the run diverged or the solver failed."""
         if self.status in ("diverged", "failed"):
             raise SimulationError(float(self.t[-1]) if self.t.size else 0.0, self.message)

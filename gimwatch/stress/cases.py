@@ -2,9 +2,10 @@
 
 Long, tapered, lopsided and mixed chains, robots at singular poses, floating humanoids.
 
-Chains come from the generator (:func:`gimwatch.model.chains.chain_spec`); robots from
-example-robot-data. A case is built lazily (:meth:`StressCase.build`), so listing the cases
-costs nothing and a 500-link chain is only generated when it is run.
+Chains come from the generator
+([`chain_spec`][gimwatch.model.chains.chain_spec]); robots from
+example-robot-data. A case is built lazily (`StressCase.build`), so listing the cases costs nothing
+and a 500-link chain is only generated when it is run.
 """
 
 from __future__ import annotations

@@ -171,7 +171,7 @@ def planar_reference(
     gravity_m_s2: tuple[float, float] = (0.0, -9.81),
     dps: int = REFERENCE_DIGITS,
 ) -> np.ndarray:
-    """q̈ of a planar rod chain at ``dps`` digits (see :class:`PlanarChainReference`)."""
+    """q̈ of a planar rod chain at ``dps`` digits (see `PlanarChainReference`)."""
     return PlanarChainReference(spec, gravity_m_s2=tuple(gravity_m_s2), dps=dps).forward_dynamics(
         q, v, tau
     )

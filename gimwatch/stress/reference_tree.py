@@ -1,7 +1,7 @@
 """High-precision (mpmath) forward and inverse dynamics of any kinematic tree, without Pinocchio.
 
-The planar closed form of :mod:`gimwatch.stress.reference_planar` covers planar revolute chains
-only; this
+The planar closed form of [`gimwatch.stress.reference_planar`][gimwatch.stress.reference_planar]
+covers planar revolute chains only; this
 module covers every tree DeNOC reads (revolute, continuous and prismatic joints, fixed or
 free-flyer base). It runs Featherstone's articulated-body algorithm (ABA, *Rigid Body
 Dynamics Algorithms* 2008, Table 7.1) and recursive Newton–Euler algorithm (RNEA, Table 5.1)
@@ -9,12 +9,13 @@ in body coordinates with spatial vectors ``[ω; v]``, all in mpmath at ``dps`` d
 default), so its own round-off is ~10^−dps·κ, far below float64's κ·eps.
 
 What it shares with the code it checks: the URDF is read into a
-:class:`~gimwatch.denoc.tree.BodyTree` by DeNOC's reader (yourdfpy; fixed links merged).
+[`BodyTree`][gimwatch.denoc.BodyTree] by DeNOC's reader (yourdfpy; fixed links merged).
 Everything after that — kinematics, spatial algebra, the recursions, the arithmetic — is
 written here, independently of Pinocchio and of DeNOC's recursions (which use world-frame
 composite inertias and a UDUᵀ elimination, not body-frame articulated inertias). Inputs are
 taken as exact binary floats. ``rnea(q, v, aba(q, v, τ)) = τ`` to ~10^−(dps−5) checks it
-against itself, and the planar closed form against :mod:`gimwatch.stress.reference_planar`.
+against itself, and the planar closed form against
+[`gimwatch.stress.reference_planar`][gimwatch.stress.reference_planar].
 """
 
 from __future__ import annotations
@@ -112,10 +113,10 @@ def _cross_force(v: list, f: list) -> list:
 
 
 class TreeReference:
-    """ABA and RNEA of a :class:`BodyTree` in mpmath, in Pinocchio's coordinate layout.
+    """ABA and RNEA of a `BodyTree` in mpmath, in Pinocchio's coordinate layout.
 
     Args:
-        tree: The body tree (from :func:`gimwatch.denoc.read_body_tree`).
+        tree: The body tree (from [`read_body_tree`][gimwatch.denoc.read_body_tree]).
         q_index: Index of each moving joint's first q coordinate, by joint name
             (``root_joint`` for the free-flyer: x, y, z, qx, qy, qz, qw).
         v_index: Index of each moving joint's first velocity coordinate, by joint name

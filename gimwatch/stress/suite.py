@@ -1,4 +1,4 @@
-"""The stress suite: on each hard case (:mod:`gimwatch.stress.cases`), do the numbers stay right?
+"""The stress suite: on each hard case (`gimwatch.stress.cases`), do the numbers stay right?
 
 Per case, at its configuration q with seeded random v ~ U(−1, 1) and τ ~ U(−10, 10):
 
@@ -6,10 +6,10 @@ Per case, at its configuration q with seeded random v ~ U(−1, 1) and τ ~ U(�
 2. DeNOC's M equals the reference M: Pinocchio's CRBA (relative Frobenius error ≤ 1e-10),
    or the planar closed form in mpmath when Pinocchio's Data would not fit (nv > 400);
 3. q̈ from ``aba``, ``crba-cholesky`` and ``denoc`` is within ``C·κ·eps`` of an mpmath
-   reference at 50 digits (relative 2-norm error), with :data:`ERROR_CONSTANT` C = 10·√nv;
+   reference at 50 digits (relative 2-norm error), with `ERROR_CONSTANT` C = 10·√nv;
 4. the watch's estimators (κ, δ, αδ, pivot ratios, LAPACK's rcond) are finite;
 5. optionally, a 5 s gravity simulation keeps every value finite and the relative energy
-   drift below :data:`ENERGY_DRIFT_LIMIT` (1e-8).
+   drift below `ENERGY_DRIFT_LIMIT` (1e-8).
 
 Why C = 10·√nv: a backward-stable solve of M a = b has ‖Δa‖/‖a‖ ≤ κ·η/(1 − κη) where the
 normwise backward error η of Cholesky (and of the ABA/UDUᵀ recursions) is a modest multiple
@@ -19,11 +19,12 @@ bias in float64 adds another such term. 10·√nv bounds every case measured wit
 (the table reports error/(κ·eps) so the margin can be read off).
 
 References: planar revolute chains use the closed-form Lagrangian of
-:mod:`gimwatch.stress.reference_planar` (independent of Pinocchio and DeNOC, even of the URDF);
-every
-other case uses :class:`gimwatch.stress.reference_tree.TreeReference`, Featherstone's ABA in
-mpmath on the body tree read by DeNOC's URDF reader (independent of both codes' recursions
-and arithmetic, not of that reader).
+[`gimwatch.stress.reference_planar`][gimwatch.stress.reference_planar] (independent of Pinocchio and
+DeNOC, even of the URDF); every
+other case uses
+[`TreeReference`][gimwatch.stress.reference_tree.TreeReference],
+Featherstone's ABA in mpmath on the body tree read by DeNOC's URDF reader (independent of both
+codes' recursions and arithmetic, not of that reader).
 """
 
 from __future__ import annotations
@@ -82,7 +83,7 @@ class StressResult:
         cholesky_ok: A Cholesky factorisation of M succeeded.
         gim_error: DeNOC's M against the reference M (``gim_reference``).
         gim_reference: ``crba`` or ``planar closed form (mpmath)``.
-        errors: q̈ error per method of :data:`METHODS` against the mpmath reference.
+        errors: q̈ error per method of `METHODS` against the mpmath reference.
         bound: C·κ·eps.
         reference: Which mpmath reference.
         estimators_finite: κ, δ, αδ, pivot ratios and rcond all finite.

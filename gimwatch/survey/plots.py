@@ -14,10 +14,37 @@ import numpy as np
 
 from gimwatch.survey.run import SurveyResult
 
-__all__ = ["HIGHLIGHTED", "plot_kappa_vs_delta", "plot_kappa_vs_delta_grid"]
+__all__ = [
+    "HIGHLIGHTED",
+    "OUTLIER_DECADES",
+    "grid_figsize",
+    "plot_kappa_vs_delta",
+    "plot_kappa_vs_delta_grid",
+]
 
 #: How many robots the scatter highlights: those with the lowest Pearson r(log δ, log κ).
 HIGHLIGHTED = 8
+#: A point this many decades beyond the 0.5-99.5 % range of the others is left off the axes
+#: (and counted in a note) rather than stretching them: one κ = 1e17 hides 60 robots' spread.
+OUTLIER_DECADES = 1.0
+
+
+def grid_figsize(count: int) -> tuple[float, float]:
+    """The size (in) of the per-robot grid: 6 panels a row, at least 6.5 in wide for the labels."""
+    columns = min(6, max(count, 1))
+    return max(2.6 * columns, 6.5), 2.3 * math.ceil(max(count, 1) / columns) + 0.9
+
+
+def _robust_limits(values: np.ndarray) -> tuple[float, float]:
+    """Log-axis limits holding every point but lone outliers (see `OUTLIER_DECADES`)."""
+    logs = np.log10(values[np.isfinite(values) & (values > 0)])
+    if logs.size == 0:
+        return 1.0, 10.0
+    low, high = np.quantile(logs, [0.005, 0.995])
+    kept = logs[(logs >= low - OUTLIER_DECADES) & (logs <= high + OUTLIER_DECADES)]
+    low, high = kept.min(), kept.max()
+    pad = 0.05 * max(high - low, 1.0)
+    return 10 ** (low - pad), 10 ** (high + pad)
 
 
 def _format(value: float) -> str:
@@ -46,7 +73,9 @@ def plot_kappa_vs_delta(result: SurveyResult, ax=None):
     for robot in result.robots:
         if robot not in highlighted:
             ax.scatter(robot.metrics["diagonal_ratio"], robot.metrics["kappa"], s=4, color="0.75")
-    ax.scatter([], [], s=10, color="0.75", label=f"other {len(result.robots) - len(highlighted)}")
+    others = len(result.robots) - len(highlighted)
+    if others:
+        ax.scatter([], [], s=10, color="0.75", label=f"the other {others} robots")
     for k, robot in enumerate(highlighted):
         ax.scatter(
             robot.metrics["diagonal_ratio"],
@@ -55,14 +84,33 @@ def plot_kappa_vs_delta(result: SurveyResult, ax=None):
             color=f"C{k % 10}",
             label=f"{robot.name} (r = {_format(robot.pearson_log)})",
         )
-    limits = [
-        min([r.quantiles["diagonal_ratio"]["min"] for r in result.robots], default=1.0),
-        max([r.quantiles["kappa"]["max"] for r in result.robots], default=10.0),
-    ]
-    ax.plot(limits, limits, "k--", linewidth=0.8, label="κ = δ (lower bound)")
+    delta = np.concatenate([np.ravel(r.metrics["diagonal_ratio"]) for r in result.robots] or [[]])
+    kappa = np.concatenate([np.ravel(r.metrics["kappa"]) for r in result.robots] or [[]])
+    xlim, ylim = _robust_limits(delta), _robust_limits(kappa)
+    both = (min(xlim[0], ylim[0]), max(xlim[1], ylim[1]))
+    ax.plot(both, both, "k--", linewidth=0.8, label="κ = δ (lower bound)")
+    outside = (delta > xlim[1]) | (delta < xlim[0]) | (kappa > ylim[1]) | (kappa < ylim[0])
+    if outside.any():
+        worst = max(
+            (r for r in result.robots if np.nanmax(r.metrics["kappa"]) > ylim[1]),
+            key=lambda r: np.nanmax(r.metrics["kappa"]),
+            default=None,
+        )
+        extreme = f"; largest κ = {np.nanmax(kappa):.2g} ({worst.name})" if worst else ""
+        ax.text(
+            0.99,
+            0.01,
+            f"{int(outside.sum())} point(s) beyond the axes{extreme}",
+            transform=ax.transAxes,
+            ha="right",
+            va="bottom",
+            fontsize=7,
+        )
     ax.set(
         xscale="log",
         yscale="log",
+        xlim=xlim,
+        ylim=ylim,
         xlabel="diagonal ratio δ [-]",
         ylabel="condition number κ₂ [-]",
         title=f"κ against δ, {len(result.robots)} robots "
@@ -83,7 +131,7 @@ def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
     if fig is None:
         import matplotlib.pyplot as plt
 
-        fig = plt.figure(figsize=(2.6 * columns, 2.3 * rows + 0.6))
+        fig = plt.figure(figsize=grid_figsize(count))
     fig.set_layout_engine("constrained")
     axes = fig.subplots(rows, columns, squeeze=False)
     for ax, robot in zip(axes.flat, result.robots, strict=False):
@@ -93,13 +141,19 @@ def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
         if math.isfinite(robot.alpha):
             ax.plot(line, robot.alpha * line, "k--", linewidth=0.7)
         ax.set(xscale="log", yscale="log")
-        for axis in (ax.xaxis, ax.yaxis):  # at most three labelled decades: no colliding ticks
-            axis.set_major_locator(LogLocator(numticks=3))
-            axis.set_minor_formatter(NullFormatter())
+        for axis, values in ((ax.xaxis, delta), (ax.yaxis, robot.metrics["kappa"])):
+            finite = np.asarray(values)[np.isfinite(values) & (np.asarray(values) > 0)]
+            if finite.size and np.ptp(np.log10(finite)) >= 1.0:  # spans a decade or more
+                # at most three labelled decades: no colliding ticks
+                axis.set_major_locator(LogLocator(numticks=3))
+                axis.set_minor_formatter(NullFormatter())
+            # less than a decade: matplotlib's default labels the minor ticks, so that no
+            # panel is left without numbers
         ax.set_title(f"{robot.name} (r = {_format(robot.pearson_log)})", fontsize=7)
-        ax.tick_params(labelsize=6)
+        ax.tick_params(which="both", labelsize=6)
     for ax in axes.flat[len(result.robots) :]:
         ax.set_axis_off()
     fig.supxlabel("diagonal ratio δ [-]")
-    fig.supylabel("condition number κ₂ [-]   (dashed: αδ, α at the neutral configuration)")
+    fig.supylabel("condition number κ₂ [-]")
+    fig.suptitle("κ against δ per robot (dashed: κ = αδ, α at the neutral configuration)")
     return fig

@@ -104,6 +104,16 @@ class SurveyResult:
     not_reached: tuple[str, ...] = ()
     trajectory_settings: TrajectorySettings | None = None
 
+    def __repr__(self) -> str:
+        """One line: how many robots were surveyed and failed, and the sampling."""
+        names = [r.name for r in self.robots]
+        shown = ", ".join(names[:5]) + (f", ... ({len(names) - 5} more)" if len(names) > 5 else "")
+        state = ", interrupted" if self.interrupted else ""
+        return (
+            f"SurveyResult({len(self.robots)} robots [{shown}], {len(self.failures)} failures, "
+            f"{self.samples} random samples each, seed {self.seed}{state})"
+        )
+
     def to_dataframe(self) -> pd.DataFrame:
         """One row per (robot, sample): robot, nv, base, sample (0 = neutral) and the metrics.
 

@@ -1,6 +1,6 @@
-"""Write a survey result (:class:`~gimwatch.survey.run.SurveyResult`): report, JSON, CSV, plots.
+"""Write a survey result (`SurveyResult`): report, JSON, CSV, plots.
 
-The folder is written beside its place and swapped in whole (:mod:`gimwatch.output.folders`),
+The folder is written beside its place and swapped in whole (`gimwatch.output.folders`),
 so an interrupted or failed write leaves the previous survey as it was, never a mix of two;
 an interrupted survey is written too, and says so.
 """
@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from pathlib import Path
 
 from gimwatch.output.atomic import write_bytes_atomic, write_json_atomic, write_text_atomic
 from gimwatch.output.environment import versions
 from gimwatch.output.folders import ResultsFolder
-from gimwatch.survey.plots import plot_kappa_vs_delta, plot_kappa_vs_delta_grid
+from gimwatch.survey.plots import grid_figsize, plot_kappa_vs_delta, plot_kappa_vs_delta_grid
 from gimwatch.survey.report_markdown import GRID_PNG, SCATTER_PNG, markdown_report, readme_table
 from gimwatch.survey.run import DOF_METRICS, METRICS, SurveyResult
 from gimwatch.survey.trajectory import TrajectoryStatistics
@@ -169,9 +168,7 @@ def write_survey(
         fig = Figure(figsize=(8, 6), layout="constrained")
         plot_kappa_vs_delta(result, ax=fig.subplots())
         write_bytes_atomic(staging / SCATTER_PNG, _png(fig))
-        count = max(len(result.robots), 1)
-        columns = min(6, count)
-        grid = Figure(figsize=(2.6 * columns, 2.3 * math.ceil(count / columns) + 0.6))
+        grid = Figure(figsize=grid_figsize(len(result.robots)))
         write_bytes_atomic(staging / GRID_PNG, _png(plot_kappa_vs_delta_grid(result, fig=grid)))
         record = survey_record(result, wall_time_s=wall_time_s)
         write_json_atomic(staging / "survey.json", record)

@@ -2,9 +2,9 @@
 
 For each robot, sample 0 is the neutral configuration (Pinocchio's ``neutral``: zero angles,
 identity quaternions) and samples 1..K are drawn uniformly within the joint limits with
-:func:`~gimwatch.model.robots.random_configurations` (seeded, all drawn up front, then cut into
-chunks), so the result does not depend on how the chunks are scheduled. At every sample the
-GIM M(q) comes from Pinocchio's CRBA and gives:
+[`random_configurations`][gimwatch.model.robots.random_configurations] (seeded, all drawn up front,
+then cut into chunks), so the result does not depend on how the chunks are scheduled. At every
+sample the GIM M(q) comes from Pinocchio's CRBA and gives:
 
 * κ₂ = λmax/λmin (Shah & Saha 2013, Eq. 6) and δ = max M_ii / min M_ii (Sec. 4);
 * the forward (LDLᵀ) and backward (UDUᵀ) pivot ratios (Sec. 4, Fig. 4);
@@ -15,7 +15,8 @@ Per robot the survey reports quantiles of κ, δ and the pivot ratios; the Pears
 Spearman correlations of log δ with log κ; the relative error |αδ - κ|/κ of the scaled
 diagonal ratio (Eq. 15) with α = κ/δ calibrated once at the neutral sample (the paper's
 t0), over samples 1..K; the worst configurations; and the coordinates that most often
-carry the extremes. Nothing here prints; :mod:`gimwatch.survey.report` writes the files.
+carry the extremes. Nothing here prints; [`gimwatch.survey.report`][gimwatch.survey.report] writes
+the files.
 """
 
 from __future__ import annotations
@@ -82,7 +83,7 @@ if TYPE_CHECKING:
 
 #: Estimated in-process cost of one sample (CRBA, eigh, two factorisations), in seconds: a
 #: constant for the Python around it plus the O(nv³) eigensolve. Only decides whether a
-#: default sweep starts worker processes (:data:`gimwatch.survey.sweep.POOL_WORTH_S`).
+#: default sweep starts worker processes (`gimwatch.survey.sweep.POOL_WORTH_S`).
 SAMPLE_COST_S, SAMPLE_COST_S_PER_NV3 = 2e-3, 6e-9
 #: Estimated in-process cost of one simulated run, per simulated second.
 RUN_COST_S_PER_S = 1.0
@@ -105,8 +106,8 @@ def sample_metrics(robot: Robot, qs: np.ndarray, *, data=None) -> dict[str, np.n
     """κ, δ, pivot ratios, extreme eigenvalues and extreme coordinates at each row of ``qs``.
 
     Returns:
-        Arrays of length ``len(qs)`` keyed by :data:`METRICS` (floats) and
-        :data:`DOF_METRICS` (int indices into ``robot.dof_names``).
+        Arrays of length ``len(qs)`` keyed by `METRICS` (floats) and
+        `DOF_METRICS` (int indices into ``robot.dof_names``).
 
     Raises:
         ConditioningError: M(q) is singular (a coordinate moves no mass) or not positive definite.
@@ -226,7 +227,7 @@ def run_survey(
     *,
     samples: int = 200,
     seed: int = 0,
-    floating: bool = False,
+    floating: bool | None = None,
     chunk_size: int = 50,
     workers: int | None = None,
     scheduler: str | None = None,
@@ -235,22 +236,26 @@ def run_survey(
 ) -> SurveyResult:
     """Survey robots at the neutral configuration plus ``samples`` random ones each.
 
-    Robots that cannot be loaded, or whose M(q) is singular, become :class:`RobotFailure`
-    records and the survey goes on. Ctrl-C returns what was finished (``interrupted=True``).
+    Robots that cannot be loaded, or whose M(q) is singular, become
+    [`RobotFailure`][gimwatch.survey.run.RobotFailure] records and the survey goes on. Ctrl-C
+    returns what was finished (``interrupted=True``).
 
     Args:
         specs: Robot specifications; ``all`` means every example-robot-data robot.
         samples: K, random configurations per robot (>= 1), besides the neutral one.
-        seed: Seed of :func:`~gimwatch.model.robots.random_configurations` (same for every robot).
-        floating: Give every robot a free-flyer base. Without it, robots with no joint
-            (drones) get one anyway and say so in ``note``.
+        seed: Seed of [`random_configurations`][gimwatch.model.robots.random_configurations] (same
+            for every robot).
+        floating: True gives every robot a free-flyer base, False a fixed one; None (the
+            default) each robot its own (`default_floating`: example-robot-data's base,
+            a free-flyer for legged robots and humanoids). A robot with no joint on a fixed base
+            (a drone) gets a free-flyer anyway and says so in ``note``.
         chunk_size: Samples per task.
         workers: Local processes; 1 runs in this process. Default: this process for small
             surveys (estimated under a few seconds), else every core.
         scheduler: ``"local"`` or a Dask scheduler address to run the chunks on Dask.
         progress: Called as ``progress(finished_chunks, total_chunks)`` after each chunk.
         trajectories: Also simulate short runs from random samples 1..count of each robot
-            (:mod:`gimwatch.survey.trajectory`); each run is one more task of the sweep.
+            (`gimwatch.survey.trajectory`); each run is one more task of the sweep.
     """
     for name, value in (("samples", samples), ("chunk_size", chunk_size)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:

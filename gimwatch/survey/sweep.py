@@ -1,22 +1,22 @@
 """Run independent chunks of work in-process, on local processes, or on a Dask cluster.
 
-A sweep is a list of :class:`Task` (a picklable module-level function and its arguments).
+A sweep is a list of `Task` (a picklable module-level function and its arguments).
 Results come back keyed by the task's position, so their order never depends on which worker
 finished first: the same tasks give the same results on any backend.
 
 Backends:
 
 * ``workers=1`` — in this process, one task after another (notebooks, tests, debugging);
-* ``workers=N`` — a :class:`concurrent.futures.ProcessPoolExecutor`;
+* ``workers=N`` — a `concurrent.futures.ProcessPoolExecutor`;
 * ``workers=None`` (default) — every core, unless every task states its cost and they add up
-  to less than :data:`POOL_WORTH_S`: starting worker processes (each imports gimwatch,
+  to less than `POOL_WORTH_S`: starting worker processes (each imports gimwatch,
   Pinocchio and SciPy) costs seconds, more than tiny sweeps take in this process;
 * ``scheduler="local"`` — a fresh Dask ``LocalCluster`` (one single-threaded worker per core);
 * ``scheduler="tcp://host:port"`` — an existing Dask scheduler.
 
-Every task runs with BLAS limited to one thread (:func:`run_task`): GIMs are small dense
+Every task runs with BLAS limited to one thread (`run_task`): GIMs are small dense
 matrices, for which multi-threaded OpenBLAS is 20-40x slower on 2 cores, and workers already
-use the cores in parallel. Ctrl-C (:class:`KeyboardInterrupt`) stops the sweep and returns what
+use the cores in parallel. Ctrl-C (`KeyboardInterrupt`) stops the sweep and returns what
 was finished; pending tasks are cancelled.
 """
 
@@ -191,7 +191,7 @@ def run_sweep(
     Args:
         tasks: The work; each function must be importable (it is pickled by name).
         workers: Local processes; 1 runs in this process. Default: this process when every
-            task states a cost and they sum to less than :data:`POOL_WORTH_S`, else
+            task states a cost and they sum to less than `POOL_WORTH_S`, else
             ``os.cpu_count()`` processes. Ignored when ``scheduler`` is given.
         scheduler: ``"local"`` for a fresh Dask ``LocalCluster``, or the address of a
             running Dask scheduler; None for local processes.

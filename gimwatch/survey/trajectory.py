@@ -1,16 +1,17 @@
 """Short simulated trajectories for the survey: does δ track κ along a motion?
 
-For each robot, :class:`TrajectorySettings` ``count`` runs start at rest (v = 0) from the
+For each robot, `TrajectorySettings` ``count`` runs start at rest (v = 0) from the
 first random configurations of the survey (samples 1..count) and fall under gravity
 g = (0, 0, -9.81) m/s² (URDF's z up; (0, -9.81, 0) for generated chains, which move in
 the xy plane) for ``duration_s`` with light diagonal joint damping
 c_i = ``damping_per_s`` · M_ii(q0) (each joint alone would lose its velocity at that rate,
 whatever its inertia; a constant c would make light distal joints stiff). Joint limits are
-not enforced. Each run is an ordinary scene (:func:`gimwatch.simulation.scene.parse_scene`) run by
-:mod:`gimwatch.simulation.simulate`: DOP853 at a modest tolerance, or fixed-step RK4 when q has
-unit-complex coordinates (continuous joints), which SciPy's integrators cannot integrate
-as a vector. The watch samples κ, δ and αδ with α = κ(t0)/δ(t0) calibrated at the first
-sample of each run (Shah & Saha 2013, Eq. 15, the paper's setting).
+not enforced. Each run is an ordinary scene
+([`parse_scene`][gimwatch.simulation.scene.parse_scene]) run by
+[`gimwatch.simulation.simulate`][gimwatch.simulation.simulate]: DOP853 at a modest tolerance, or
+fixed-step RK4 when q has unit-complex coordinates (continuous joints), which SciPy's integrators
+cannot integrate as a vector. The watch samples κ, δ and αδ with α = κ(t0)/δ(t0) calibrated at the
+first sample of each run (Shah & Saha 2013, Eq. 15, the paper's setting).
 
 Robots with a floating base are not simulated: with gravity as the only effect and no
 contact every body falls alike, the joints stay at rest and M(q) does not change.
@@ -147,7 +148,7 @@ class SurveyRun:
 
     Attributes:
         start_sample: The random sample it started from.
-        status: :data:`gimwatch.simulation.simulate.STATUSES`; only completed runs enter the
+        status: `gimwatch.simulation.simulate.STATUSES`; only completed runs enter the
         statistics.
         message: Why it stopped early ("" when completed).
         method: Integrator used.

@@ -1,0 +1,82 @@
+"""Where the κ tracker and the watch's δ get their O(n) operators from.
+
+* [`lean_model`][gimwatch.metrics.tracker.providers.lean_model] — DeNOC's compiled
+  [`LeanModel`][gimwatch.denoc.LeanModel] of a robot (the backend's when it has one, else built once
+  from the chain spec or the URDF), or None when DeNOC cannot read the robot;
+* [`gim_products`][gimwatch.metrics.tracker.providers.gim_products] — that model, or else
+  [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts];
+* [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts] — ``M(q) x = RNEA(q,
+  0, x)`` and ``M(q)⁻¹ y = ABA(q, 0, y)`` with gravity off (see
+  [`gimwatch.metrics.matrix_free`][gimwatch.metrics.matrix_free]), behind the three methods
+  [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] calls (``configure(q)``,
+  ``gim_product(x)``, ``gim_solve(y)``): for robots DeNOC does not read, or to check one
+  implementation against the other. DeNOC's model is the cheaper provider: its products reuse the
+  configuration's kinematics and factor, Pinocchio's recompute them every call.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from gimwatch.errors import GimwatchError
+from gimwatch.model.robots import Robot
+
+__all__ = ["PinocchioProducts", "gim_products", "lean_model"]
+
+
+def lean_model(robot: Robot, dynamics=None):
+    """DeNOC's compiled model of ``robot`` in Pinocchio's coordinate order, or None.
+
+    Args:
+        robot: The robot.
+        dynamics: A simulation backend; its ``lean`` model is reused when it has one.
+    """
+    lean = getattr(dynamics, "lean", None)
+    if lean is not None:
+        return lean
+    from gimwatch.denoc import DenocModel
+
+    try:
+        if robot.chain is not None and not robot.floating:
+            return DenocModel.from_chain(robot.chain).lean()  # no URDF parsing for chain:N
+        return DenocModel.from_urdf(
+            robot.urdf_xml, floating=robot.floating, joint_order=robot.joint_names
+        ).lean()
+    except GimwatchError:  # a joint type DeNOC does not read
+        return None
+
+
+def gim_products(robot: Robot, dynamics=None, data: pin.Data | None = None):
+    """The cheapest provider of M·x and M⁻¹·y for ``robot``: DeNOC's, else Pinocchio's."""
+    lean = lean_model(robot, dynamics)
+    return lean if lean is not None else PinocchioProducts(robot, data)
+
+
+class PinocchioProducts:
+    """RNEA / ABA at zero velocity and gravity as M·x and M⁻¹·y.
+
+    Args:
+        robot: The robot.
+        data: A Pinocchio Data to reuse (one is made when omitted).
+    """
+
+    def __init__(self, robot: Robot, data: pin.Data | None = None) -> None:
+        self.model = pin.Model(robot.model)
+        self.model.gravity = pin.Motion.Zero()
+        self.data = robot.new_data() if data is None else data
+        self.nv = robot.nv
+        self._zero = np.zeros(robot.nv)
+        self._q = np.zeros(robot.nq)
+
+    def configure(self, q: np.ndarray) -> None:
+        """Set the configuration of the products."""
+        self._q = np.asarray(q, dtype=float)
+
+    def gim_product(self, x: np.ndarray) -> np.ndarray:
+        """M(q) x."""
+        return pin.rnea(self.model, self.data, self._q, self._zero, x)
+
+    def gim_solve(self, y: np.ndarray) -> np.ndarray:
+        """M(q)⁻¹ y."""
+        return pin.aba(self.model, self.data, self._q, self._zero, y)

@@ -1,0 +1,264 @@
+"""Real-world URDF conventions that do not change M(q): read with one warning, not refused.
+
+Robot descriptions in the wild are written by xacro, CAD exporters and hand, and read by
+lenient parsers (Bullet's, ROS's); urdfdom (Pinocchio's parser) and expat refuse some of what
+they accept. What cannot change the mass matrix is normalised here, before the value checks,
+and listed in one [`URDFWarning`][gimwatch.errors.URDFWarning] per file:
+
+* text: an XML declaration after comments or blank lines (removed), NUL bytes or other
+  control characters after the root element (removed);
+* a default namespace on ``<robot xmlns="...">`` (tags read without it);
+* ``<visual>`` and ``<collision>`` elements that urdfdom cannot read (an unknown geometry such
+  as Bullet's ``<plane>``, an empty ``<geometry>``, a four-number mesh scale): removed — shapes
+  do not enter M;
+* numbers separated by commas (``xyz="0.07, 0, -0.69"``): read as spaces;
+* joint limits: a negative ``effort``/``velocity`` ("unlimited", e.g. ``effort="-1"``) or a
+  missing one (read as 0), a missing ``<limit>`` on a revolute or prismatic joint, and
+  ``lower > upper`` (Bullet's "no limit"): the position range becomes the placeholder
+  ±`gimwatch.model.sampling.PLACEHOLDER_LIMIT` (random draws use ±π rad / ±1 m);
+* an empty ``<dynamics/>`` (removed; damping and friction do not enter M);
+* a ``<mimic>`` of a fixed joint: the follower would stay at its offset; like every mimic
+  joint it is modelled as an independent joint, as Pinocchio does.
+
+What makes M undefined or wrong is still refused by the value checks
+(`gimwatch.model.urdf_values`): non-finite or unparsable numbers in origins, axes and
+inertials, negative masses, non-positive-semi-definite inertias, unknown joint types.
+Every scan here is linear in the size of the text.
+"""
+
+from __future__ import annotations
+
+import warnings
+import xml.etree.ElementTree as ET
+
+from gimwatch.errors import URDFError, URDFWarning
+
+__all__ = ["fix_namespace", "fix_text_quirks", "fix_tree_quirks", "warn_quirks"]
+
+#: The placeholder range written for a limit that means "unlimited" (see sampling).
+_UNLIMITED = "1000"
+_GEOMETRIES = ("box", "cylinder", "sphere", "mesh")
+_SHAPE_ATTRIBUTES = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",)}
+_CONTROL = {chr(c) for c in range(32) if chr(c) not in "\t\n\r"}
+
+
+def fix_text_quirks(xml: str) -> tuple[str, list[str]]:
+    """The text without a byte-order mark, a misplaced XML declaration or a control tail."""
+    fixes = []
+    xml = xml.removeprefix("\ufeff")
+    end = len(xml)
+    while end and (xml[end - 1] in _CONTROL or xml[end - 1].isspace()):
+        end -= 1
+    if any(c in _CONTROL for c in xml[end:]):
+        fixes.append("control characters (NUL bytes) after the root element removed")
+        xml = xml[:end] + "\n"
+    declaration = _misplaced_declaration(xml)
+    if declaration is not None:
+        fixes.append("an XML declaration after comments or blank lines removed")
+        xml = xml[: declaration[0]] + xml[declaration[1] :]
+    return xml, fixes
+
+
+def _misplaced_declaration(xml: str) -> tuple[int, int] | None:
+    """(start, end) of an ``<?xml ...?>`` preceded only by blank lines and comments."""
+    position = 0
+    while True:
+        while position < len(xml) and xml[position].isspace():
+            position += 1
+        if not xml.startswith("<!--", position):
+            break
+        close = xml.find("-->", position + 4)
+        if close < 0:
+            return None
+        position = close + 3
+    if position == 0 or not xml.startswith("<?xml", position):
+        return None
+    close = xml.find("?>", position)
+    return None if close < 0 else (position, close + 2)
+
+
+def _strip_namespaces(root: ET.Element) -> bool:
+    changed = False
+    for element in root.iter():
+        if isinstance(element.tag, str) and element.tag.startswith("{"):
+            element.tag = element.tag.split("}", 1)[1]
+            changed = True
+    return changed
+
+
+def fix_namespace(root: ET.Element) -> list[str]:
+    """Read ``<robot xmlns="...">`` without its default namespace (urdfdom ignores it)."""
+    if isinstance(root.tag, str) and root.tag.startswith("{") and _strip_namespaces(root):
+        return ["a default XML namespace on <robot> ignored"]
+    return []
+
+
+def _is_number_list(text: str, count: int) -> bool:
+    parts = text.split()
+    if len(parts) != count:
+        return False
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        return False
+    return all(abs(v) < float("inf") for v in values)
+
+
+def _bad_shape(shape: ET.Element) -> str:
+    """Why urdfdom cannot read a visual/collision element, or "" when it can."""
+    geometry = shape.find("geometry")
+    kinds = list(geometry) if geometry is not None else []
+    if len(kinds) != 1 or kinds[0].tag not in _GEOMETRIES:
+        found = ", ".join(f"<{k.tag}>" for k in kinds) or "nothing"
+        return f"its <geometry> holds {found}"
+    kind = kinds[0]
+    if kind.tag == "mesh":
+        if not kind.get("filename"):
+            return "its <mesh> has no filename"
+        scale = kind.get("scale")
+        if scale is not None and not _is_number_list(scale, 3):
+            return f"its <mesh scale> is {scale!r}"
+        return ""
+    for attribute in _SHAPE_ATTRIBUTES[kind.tag]:
+        text = kind.get(attribute)
+        if text is None or not _is_number_list(text, 3 if attribute == "size" else 1):
+            return f"its <{kind.tag} {attribute}> is {text!r}"
+    origin = shape.find("origin")
+    for attribute in ("xyz", "rpy"):
+        text = origin.get(attribute) if origin is not None else None
+        if text is not None and not _is_number_list(text.replace(",", " "), 3):
+            return f"its <origin {attribute}> is {text!r}"
+    material = shape.find("material")
+    color = material.find("color") if material is not None else None
+    if color is not None and not _is_number_list(color.get("rgba") or "", 4):
+        return f"its <color rgba> is {color.get('rgba')!r}"
+    return ""
+
+
+def _drop_unreadable_shapes(root: ET.Element) -> list[str]:
+    dropped = []
+    for link in root.findall("link"):
+        for tag in ("visual", "collision"):
+            for shape in link.findall(tag):
+                problem = _bad_shape(shape)
+                if problem:
+                    link.remove(shape)
+                    dropped.append(f"{link.get('name')} <{tag}> ({problem})")
+    if not dropped:
+        return []
+    shown = "; ".join(dropped[:3]) + ("; ..." if len(dropped) > 3 else "")
+    return [f"{len(dropped)} visual/collision shape(s) urdfdom cannot read removed: {shown}"]
+
+
+def _commas_as_spaces(root: ET.Element) -> list[str]:
+    """Origins and axes whose three numbers are separated by commas (``0.07, 0, -0.69``).
+
+    Only where the commas are unambiguous separators: a decimal comma (``0,5``) would change
+    a value and is left to the value checks, which refuse it.
+    """
+    where = []
+    for element in root.iter():
+        if element.tag not in ("origin", "axis"):
+            continue
+        for key in ("xyz", "rpy"):
+            value = element.get(key)
+            if value and "," in value:
+                spaced = value.replace(",", " ").split()
+                if len(spaced) == 3:
+                    element.set(key, " ".join(spaced))
+                    where.append(f"<{element.tag} {key}={value!r}>")
+    if not where:
+        return []
+    more = ", ..." if len(where) > 2 else ""
+    return [f"numbers separated by commas read as spaces ({', '.join(where[:2])}{more})"]
+
+
+def _limit_quirks(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
+    negative, missing_value, missing_limit, reversed_range, empty_dynamics = [], [], [], [], []
+    for joint in root.findall("joint"):
+        name, kind = joint.get("name"), joint.get("type")
+        limit = joint.find("limit")
+        if limit is None and kind in ("revolute", "prismatic"):
+            bounds = {"lower": "-" + _UNLIMITED, "upper": _UNLIMITED}
+            limit = ET.SubElement(joint, "limit", effort="0", velocity="0", **bounds)
+            missing_limit.append(name)
+        if limit is not None:
+            for key in ("effort", "velocity"):
+                text = limit.get(key)
+                if text is None:
+                    limit.set(key, "0")
+                    missing_value.append(f"{name}.{key}")
+                    continue
+                try:
+                    value = float(text)
+                except ValueError:
+                    value = -1.0  # unreadable, as urdfdom would say: read as unlimited too
+                if not value >= 0:
+                    limit.set(key, "0")
+                    negative.append(f"{name}.{key}={text}")
+            if kind in ("revolute", "prismatic"):
+                try:
+                    lower = float(limit.get("lower", "0"))
+                    upper = float(limit.get("upper", "0"))
+                except ValueError:  # e.g. lower="-1.57." (a typo urdfdom refuses)
+                    lower, upper = 1.0, 0.0
+                if not lower <= upper:
+                    limit.set("lower", "-" + _UNLIMITED)
+                    limit.set("upper", _UNLIMITED)
+                    reversed_range.append(name)
+        dynamics = joint.find("dynamics")
+        if dynamics is not None and dynamics.get("damping") is dynamics.get("friction") is None:
+            joint.remove(dynamics)
+            empty_dynamics.append(name)
+    fixes = []
+    for joints, what in (
+        (negative, "negative or unreadable effort/velocity limits read as unlimited"),
+        (missing_value, "missing <limit> effort/velocity read as 0"),
+        (missing_limit, "revolute/prismatic joints without <limit> read as unlimited"),
+        (reversed_range, "limits with lower > upper (or unreadable) read as unlimited"),
+        (empty_dynamics, "empty <dynamics/> removed"),
+    ):
+        if joints:
+            more = ", ..." if len(joints) > 3 else ""
+            fixes.append(f"{what} ({', '.join(joints[:3])}{more})")
+    return fixes
+
+
+def _mimics_of_fixed(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
+    followers = [
+        f"{joint.get('name')} -> {mimic.get('joint')}"
+        for joint in root.findall("joint")
+        if (mimic := joint.find("mimic")) is not None and kinds.get(mimic.get("joint")) == "fixed"
+    ]
+    if not followers:
+        return []
+    shown = ", ".join(followers[:3]) + (", ..." if len(followers) > 3 else "")
+    return [
+        f"<mimic> of a fixed joint ({shown}): the follower stays at its offset on the robot; "
+        "like every mimic joint it is modelled as an independent joint"
+    ]
+
+
+def fix_tree_quirks(root: ET.Element, source: str) -> list[str]:
+    """Normalise, in place, what urdfdom would refuse but M does not depend on."""
+    if root.tag != "robot":
+        raise URDFError(source, f"the root element must be <robot>, got <{root.tag}>")
+    kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
+    return [
+        *_commas_as_spaces(root),
+        *_drop_unreadable_shapes(root),
+        *_limit_quirks(root, kinds),
+        *_mimics_of_fixed(root, kinds),
+    ]
+
+
+def warn_quirks(source: str, fixes: list[str], *, stacklevel: int) -> None:
+    """One URDFWarning naming what was read leniently; nothing when there was nothing."""
+    if fixes:
+        warnings.warn(
+            URDFWarning(
+                f"{source}: read with {len(fixes)} lenient reading(s) that do not change M: "
+                + "; ".join(fixes)
+            ),
+            stacklevel=stacklevel + 1,
+        )
