@@ -199,8 +199,8 @@ MUTANTS = (
     Mutant(
         "kappa-1e-7",
         "gimwatch/metrics/conditioning.py",
-        "return extreme_ratio(eigenvalues(matrix))",
-        "return extreme_ratio(eigenvalues(matrix)) * (1 + 1e-7)",
+        "return extreme_ratio(_scaled_eigenvalues(matrix)[0])",
+        "return extreme_ratio(_scaled_eigenvalues(matrix)[0]) * (1 + 1e-7)",
         ("tests/test_conditioning.py", "tests/test_stress_properties.py"),
         "κ off by 1e-7 relative",
     ),
@@ -502,7 +502,7 @@ MUTANTS = (
     ),
     Mutant(
         "tracker-kato-temple-loose",
-        "gimwatch/metrics/tracker_krylov.py",
+        "gimwatch/metrics/tracker/krylov.py|gimwatch/metrics/tracker_krylov.py",
         "estimate = rnorm2 / (theta * gap) / (1.0 + sigma * theta)",
         "estimate = 1e-4 * rnorm2 / (theta * gap) / (1.0 + sigma * theta)",
         TRACKER,
@@ -510,7 +510,7 @@ MUTANTS = (
     ),
     Mutant(
         "tracker-gap-without-second",
-        "gimwatch/metrics/tracker_krylov.py",
+        "gimwatch/metrics/tracker/krylov.py|gimwatch/metrics/tracker_krylov.py",
         "gap = theta - second if m >= 2 else abs(theta)",
         "gap = abs(theta)",
         TRACKER,
@@ -518,7 +518,7 @@ MUTANTS = (
     ),
     Mutant(
         "watch-source-free-rotation",
-        "gimwatch/metrics/watch_sources.py",
+        "gimwatch/watch/sources.py|gimwatch/metrics/watch_sources.py",
         "M[lin, :] = R.T @ M[lin, :]",
         "M[lin, :] = R @ M[lin, :]",
         ("tests/test_watch_sources.py",),
@@ -526,7 +526,7 @@ MUTANTS = (
     ),
     Mutant(
         "watch-source-armature-kept",
-        "gimwatch/metrics/watch_sources.py",
+        "gimwatch/watch/sources.py|gimwatch/metrics/watch_sources.py",
         "M[np.diag_indices(self.nv)] -= self._armature",
         "M[np.diag_indices(self.nv)] -= 0.0 * self._armature",
         ("tests/test_watch_sources.py",),
@@ -534,7 +534,7 @@ MUTANTS = (
     ),
     Mutant(
         "watch-source-diagonal-sign",
-        "gimwatch/metrics/watch_sources.py",
+        "gimwatch/watch/sources.py|gimwatch/metrics/watch_sources.py",
         "if not np.all(np.isfinite(d) & (d > 0)):",
         "if not np.all(np.isfinite(d)):",
         ("tests/test_watch_sources.py",),
@@ -543,18 +543,18 @@ MUTANTS = (
     Mutant(
         "swap-no-rollback",
         "gimwatch/output/swap.py",
-        "    except BaseException:\n        os.rename(old, target)\n        raise\n",
-        "    except BaseException:\n        raise\n",
+        "        except BaseException:\n            os.rename(old, target)\n            raise\n",
+        "        except BaseException:\n            raise\n",
         SWAP,
         "a failed second rename leaves the previous results folder moved aside",
     ),
     Mutant(
-        "swap-carries-temporaries",
+        "swap-stale-clean-up-takes-user-folders",
         "gimwatch/output/swap.py",
-        "            if not is_temporary(entry.name):\n",
-        "            if True:\n",
+        "or path == keep or not is_temporary(path):",
+        "or path == keep:",
         SWAP,
-        "carried folders take the writer's lock and staging folders with them",
+        "the clean-up after a killed writer removes a user's folder named like a staging one",
     ),
     Mutant(
         "atomic-temporary-left",
