@@ -67,6 +67,17 @@ def _scene(tmp_path: Path, duration: float = 0.2, backend: str = "aba") -> Path:
     return path
 
 
+@pytest.fixture(autouse=True)
+def _sigint_not_ignored():
+    """Run as if from a terminal even when started in the background (``cmd &`` in a script,
+    nohup, some CI runners), where SIGINT arrives ignored: Python then installs no
+    KeyboardInterrupt handler, and the commands started here would inherit the SIG_IGN (a
+    caught signal is reset to the default across exec, an ignored one is not)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 @pytest.fixture
 def old_simulation(tmp_path, capsys):
     """A scene (longer than the previous run's) and the results folder of a previous run."""
