@@ -555,22 +555,6 @@ MUTANTS = (
         "a failed second rename leaves the previous results folder moved aside",
     ),
     Mutant(
-        "swap-stale-clean-up-takes-user-folders",
-        "gimwatch/output/swap.py",
-        "or path == keep or not is_temporary(path):",
-        "or path == keep:",
-        SWAP,
-        "the clean-up after a killed writer removes a user's folder named like a staging one",
-    ),
-    Mutant(
-        "atomic-temporary-left",
-        "gimwatch/output/atomic.py",
-        "            Path(tmp).unlink(missing_ok=True)\n",
-        "            pass\n",
-        SWAP,
-        "a failed atomic write leaves its temporary file behind",
-    ),
-    Mutant(
         "estimator-pearson-linear",
         "gimwatch/metrics/estimator_quality.py",
         "scipy.stats.pearsonr(np.log(delta), np.log(kappa))",
@@ -609,16 +593,6 @@ MUTANTS = (
         '        with mpmath.workdps(15):\n            D = self._parts(q, None)["D"]',
         PRECISION,
         "the planar reference computes M(q) at 15 digits",
-    ),
-    Mutant(
-        "reference-tree-aba-30-digits",
-        "gimwatch/stress/reference_tree.py",
-        "        with mpmath.workdps(self.dps):\n            X, S = self._joints(q)\n"
-        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
-        "        with mpmath.workdps(30):\n            X, S = self._joints(q)\n"
-        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
-        PRECISION,
-        "the tree reference's ABA runs at 30 digits",
     ),
 )
 
