@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from gimwatch.errors import SceneError
-from gimwatch.model.robots import path_problem
+from gimwatch.model.robot_files import path_problem
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS as BACKEND_CLASSES
 from gimwatch.simulation.bundled_scenes import missing_scene_hint, resolve_scene
