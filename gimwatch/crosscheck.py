@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
+from gimwatch.denoc.tree import FREE_FLYER_NAME
 from gimwatch.errors import InputError, URDFError
 from gimwatch.metrics.conditioning import extreme_ratio, warn_if_ill_conditioned
 from gimwatch.model.robots import (
@@ -110,8 +111,13 @@ class CrossCheckResult:
 
 def denoc_model(robot: Robot) -> DenocModel:
     """The DeNOC model of a gimwatch robot, its coordinates in Pinocchio's order."""
+    # An MJCF file may float its root itself (a free joint named as in the file).
+    floating = "FreeFlyer" in robot.model.joints[1].shortname()
+    order = list(robot.joint_names)
+    if floating:
+        order[0] = FREE_FLYER_NAME
     return DenocModel.from_urdf(
-        robot.urdf_xml, floating=robot.floating, source=robot.source, joint_order=robot.joint_names
+        robot.urdf_xml, floating=floating, source=robot.source, joint_order=order
     )
 
 
@@ -183,8 +189,9 @@ def crosscheck_robot(
 
     M(q) is called singular only when it is numerically rank-deficient:
     λ_min(M) <= nv·ε·λ_max(M). Otherwise q̈ is compared within max(tolerance, κ·ε).
-    DeNOC reads URDF only: for an MJCF robot the reference is MuJoCo (``peer`` is forced
-    to ``"mujoco"``) and the DeNOC errors are None.
+    A robot without DeNOC input (an MJCF model with a ball joint or several floating trees,
+    see `gimwatch.model.mjcf_robot.urdf_of_model`) is compared with MuJoCo only
+    (``peer`` is forced to ``"mujoco"``) and its DeNOC errors are None.
 
     Args:
         robot: The robot (fixed or floating base, as loaded).
@@ -199,9 +206,14 @@ def crosscheck_robot(
         MujocoRefusal: MuJoCo refuses an inertia of the robot (the link is named).
     """
     tolerance = check_tolerance(tolerance)
-    model, data = robot.model, robot.new_data()
+    full_model, full_data = robot.model, robot.new_data()
+    model, data = full_model, full_data
+    if np.any(np.asarray(full_model.armature)):  # DeNOC's input has no armature: rigid bodies
+        model = full_model.copy()
+        model.armature = np.zeros(model.nv)
+        data = model.createData()
     use_denoc = bool(robot.urdf_xml)
-    peer = "mujoco" if not use_denoc else peer
+    peer = "mujoco" if not use_denoc or (robot.mujoco_joints and peer is None) else peer
     dm = denoc_model(robot) if use_denoc else None
     mj_model, refusal = None, ""
     if peer == "mujoco":
@@ -229,7 +241,11 @@ def crosscheck_robot(
             from gimwatch.model.mujoco_model import pinocchio_mass_matrix
 
             M_mj = pinocchio_mass_matrix(robot, mj_model, q)
-            errors["mujoco"] = _worst(errors["mujoco"], _relative(M_mj, M_ref))
+            M_full = M_ref
+            if model is not full_model:
+                upper = np.triu(pin.crba(full_model, full_data, q))
+                M_full = upper + np.triu(upper, 1).T
+            errors["mujoco"] = _worst(errors["mujoco"], _relative(M_mj, M_full))
         if rank_deficient and not singular_note:
             singular_note = (
                 f"M(q) is singular at a sample (λmin = {eigenvalues[0]:.3g} <= nv·ε·λmax = "
@@ -271,7 +287,11 @@ def crosscheck_robot(
             "has mass: give the links <inertial> elements)"
         )
     if not use_denoc:
-        notes.append("DeNOC reads URDF only: Pinocchio's M is compared with MuJoCo's")
+        notes.append(
+            "DeNOC reads hinges and slides on one tree with at most one free joint at its "
+            "root (this model has a ball joint or several floating trees): Pinocchio's M is "
+            "compared with MuJoCo's"
+        )
         for key in ("gim", "diag", "tau", "qdd", "backward", "pivots"):
             errors[key] = None
     elif singular_note:
@@ -296,7 +316,7 @@ def crosscheck_robot(
     )
     return CrossCheckResult(
         robot=robot.name,
-        floating=robot.floating,
+        floating=robot.floating or "FreeFlyer" in model.joints[1].shortname(),
         nv=robot.nv,
         samples=samples,
         gim_rel_err=errors["gim"],

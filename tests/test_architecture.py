@@ -33,6 +33,7 @@ LAYERS = {
     "survey": 6,
     "bench": 6,
     "demo": 6,
+    "explain": 6,
     "cli": 7,
     "__main__": 7,
     "__init__": 7,

@@ -44,6 +44,11 @@ _ROBOT_ARGV: dict[str, Callable[[str, Path], list[str]]] = {
     "analyze": lambda robot, out: ["analyze", robot],
     "crosscheck": lambda robot, out: ["crosscheck", robot],
     "survey": lambda robot, out: ["survey", robot, "-o", str(out)],
+    "explain": lambda robot, out: ["explain", robot],
+    "armature": lambda robot, out: ["armature", robot, "--target", "2", "--samples", "2"],
+    "map": lambda robot, out: [
+        *("map", robot, "--joints", "shoulder", "elbow", "--grid", "3", "-o", str(out))
+    ],
 }
 _SCENE_ARGV: dict[str, Callable[[str, Path], list[str]]] = {
     "simulate": lambda scene, out: ["simulate", scene, "-o", str(out)],
@@ -336,6 +341,82 @@ def test_the_good_scene_runs(tmp_path, capsys, monkeypatch):
 
 #: Bad command lines; ``{tmp}`` is the test's folder, which holds ``good.json``.
 BAD_ARGUMENTS = [
+    (["explain", "ur5", "--q", "0.1"], "--q: must have 6 values (q-coordinates of ur5), got 1"),
+    (["explain", "nope"], "robot 'nope': not chain:N"),
+    (["explain", "chain:3", "--top", "0"], "argument --top: must be a positive integer"),
+    (["explain", "chain:401"], "nv = 401 is too large for Pinocchio's Data"),
+    (["analyze", "chain:3", "--explain", "--csv"], "--explain must be used on the dense path"),
+    (["analyze", "chain:3", "--explain", "--backend", "denoc"], "--explain must be used on"),
+    (["armature", "chain:3", "--target", "1"], "--target must be a number > 1"),
+    (["armature", "chain:3", "--target", "0.5"], "--target must be a number > 1"),
+    (["armature", "chain:3", "--target", "nan"], "--target must be a number > 1"),
+    (["armature", "chain:3", "--target", "x"], "argument --target: invalid float value: 'x'"),
+    (["armature", "chain:3"], "the following arguments are required: --target"),
+    (["armature", "chain:3", "--target", "9", "--samples", "0"], "argument --samples: must be"),
+    (["armature", "chain:3", "--target", "9", "--samples", "10**9"], "argument --samples"),
+    (["armature", "chain:3", "--target", "9", "--samples", "999999"], "--samples must be at most"),
+    (["armature", "chain:3", "--target", "9", "--floating"], "unrecognized arguments: --floating"),
+    (["map", "chain:3", "--joints", "joint_1", "nope", "-o", "{tmp}/m"], "got 'nope'"),
+    (["map", "chain:3", "--joints", "joint_1", "joint_1", "-o", "{tmp}/m"], "two different"),
+    (["map", "chain:3", "--joints", "joint_1", "-o", "{tmp}/m"], "argument --joints: expected 2"),
+    (["map", "chain:3", "-o", "{tmp}/m"], "--joints and --trajectory must be given one at a time"),
+    (
+        ["map", "chain:3", "--joints", "joint_1", "joint_2", "--grid", "1", "-o", "{tmp}/m"],
+        "--grid must be an integer from 2 to 2000, got 1",
+    ),
+    (
+        ["map", "chain:3", "--joints", "joint_1", "joint_2", "--grid", "0", "-o", "{tmp}/m"],
+        "argument --grid: must be a positive integer",
+    ),
+    (
+        ["map", "chain:3", "--joints", "joint_1", "joint_2", "--grid", "9999", "-o", "{tmp}/m"],
+        "got 9999",
+    ),
+    (
+        ["map", "chain:3", "--joints", "joint_1", "joint_2", "--metrics", "kapa", "-o", "{tmp}/m"],
+        "--metrics must be among",
+    ),
+    (
+        [
+            "map",
+            "chain:3",
+            "--joints",
+            "joint_1",
+            "joint_2",
+            "--range",
+            "1",
+            "0",
+            "0",
+            "1",
+            "-o",
+            "{tmp}/m",
+        ],
+        "--range must be finite lower < upper",
+    ),
+    (
+        ["map", "chain:3", "--joints", "joint_1", "joint_2", "--q", "0", "-o", "{tmp}/m"],
+        "--q: must have 3 values",
+    ),
+    (
+        ["map", "chain:3", "--joints", "joint_1", "joint_2", "-o", "{tmp}/good.json"],
+        "good.json: is a file, not a folder",
+    ),
+    (
+        ["map", "chain:3", "--trajectory", "{tmp}/missing.csv", "-o", "{tmp}/m"],
+        "--trajectory must be a readable CSV file",
+    ),
+    (
+        ["map", "chain:3", "--trajectory", "{tmp}/good.json", "-o", "{tmp}/m"],
+        "good.json:1 must be column names",
+    ),
+    (
+        ["map", "chain:3", "--trajectory", "{tmp}", "-o", "{tmp}/m"],
+        "--trajectory must be a readable CSV file",
+    ),
+    (
+        ["map", "chain:3", "--joints", "joint_1", "joint_2"],
+        "the following arguments are required: -o",
+    ),
     (["chain", "0"], "argument n: must be a positive integer, got '0'"),
     (["chain", "-1"], "argument n: must be a positive integer, got '-1'"),
     (["chain", "two"], "argument n: must be a positive integer, got 'two'"),

@@ -1226,3 +1226,26 @@ def test_watch_page_quotes_the_committed_mujoco_loop_run():
     low, high, k_low, k_high = (float(x) for x in match.groups())
     assert (low, high) == (round(min(delta), 2), round(max(delta), 1))
     assert (k_low, k_high) == (int(min(kappa)), int(max(kappa)))
+
+
+def test_explain_page_quotes_the_committed_map_timings():
+    rows = _csv("explain/explain.csv")
+    arm = next(r for r in rows if r["path"] == "crba" and r["workers"] == "1")
+    pooled = next(r for r in rows if r["path"] == "crba" and r["workers"] == "2")
+    chain = next(r for r in rows if r["path"] == "denoc")
+    match = _find(
+        "docs/guide/explain.md",
+        r"nv = 9\) took ([\d.]+) s in one process \((\d+) µs per point\);\s+on 2 worker "
+        r"processes it took ([\d.]+) s",
+    )
+    assert match.groups() == (
+        f"{float(arm['seconds']):.2f}",
+        f"{float(arm['us_per_point']):.0f}",
+        f"{float(pooled['seconds']):.1f}",
+    )
+    match = _find("docs/guide/explain.md", r"O\(n\) path took (\d+) s on 2 workers \(([\d.]+) ms")
+    assert match.groups() == (
+        f"{float(chain['seconds']):.0f}",
+        f"{float(chain['us_per_point']) / 1000:.1f}",
+    )
+    assert (arm["grid"], chain["grid"], chain["nv"]) == ("200", "100", "1000")

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from gimwatch.metrics.tracker_krylov import MAX_BASIS, Workspace, _eigh, leading_python
+from gimwatch.metrics.tracker.krylov import MAX_BASIS, Workspace, _eigh, leading_python
 
 
 @pytest.mark.parametrize("m", [1, 2, 3, 5, 8, 12, 16])

@@ -73,6 +73,7 @@ SECTIONS: dict[str, Section] = {
             "gimwatch.bench.watch_mujoco",
         ),
         Section("denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section"),
+        Section("explain", "Conditioning maps", "gimwatch.bench.explain_maps"),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),
         Section("lean", "δ at the cost of its arithmetic", "gimwatch.bench.lean_cost"),
         Section(

@@ -67,6 +67,18 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gimwatch.cli.demo",
         "the main job: the paper's swinging 4-, 10- and 20-link chains, watched",
     ),
+    "explain": (
+        "gimwatch.cli.explain",
+        "why kappa is what it is: the modes of lambda_min and lambda_max, ranked sensitivities",
+    ),
+    "map": (
+        "gimwatch.cli.map",
+        "kappa and delta over a grid of two joints or along a trajectory: CSV and PNG heat map",
+    ),
+    "armature": (
+        "gimwatch.cli.armature",
+        "the least joint armature that brings kappa under a target, and what it costs",
+    ),
     "robots": ("gimwatch.cli.robots", "list the robots gimwatch can load: name, nv, base, source"),
     "metrics": ("gimwatch.cli.metrics", "list the metrics gimwatch can compute and watch"),
 }

@@ -35,11 +35,14 @@ def expand_specs(specs: Sequence[str]) -> list[str]:
 
 
 def load_each(
-    specs: Sequence[str], *, floating: bool | None
+    specs: Sequence[str], *, floating: bool | None, **options
 ) -> Iterator[tuple[str, Robot | None, GimwatchError | None]]:
-    """(spec, robot, None) for each robot that loads, (spec, None, error) for each refused."""
+    """(spec, robot, None) for each robot that loads, (spec, None, error) for each refused.
+
+    ``options``: further arguments of `load_robot` (MJCF ``body``, ``armature``).
+    """
     for spec in specs:
         try:
-            yield spec, load_robot(spec, floating=floating), None
+            yield spec, load_robot(spec, floating=floating, **options), None
         except GimwatchError as exc:
             yield spec, None, exc

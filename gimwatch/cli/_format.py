@@ -83,3 +83,19 @@ def add_base_arguments(parser: argparse.ArgumentParser) -> None:
     base.add_argument(
         "--fixed", dest="floating", action="store_const", const=False, help="a fixed base"
     )
+
+
+def add_mjcf_arguments(parser) -> None:
+    """``--body`` and ``--no-armature``: how an MJCF file is read (ignored for URDF)."""
+    parser.add_argument(
+        "--body",
+        default="",
+        metavar="NAME",
+        help="MJCF: read only the subtree of this body (default: the whole model, free "
+        "objects included, as MuJoCo's nv)",
+    )
+    parser.add_argument(
+        "--no-armature",
+        action="store_true",
+        help="MJCF: leave MuJoCo's joint armature out of M (MuJoCo's M includes it)",
+    )

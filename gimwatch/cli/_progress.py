@@ -36,3 +36,32 @@ class ProgressBar:
     def close(self) -> None:
         """Remove the bar."""
         self.bar.close()
+
+
+class ItemProgress:
+    """Progress over a list of named items (robots of a batch).
+
+    On a terminal, one tqdm bar naming the current item; in a log or a pipe, one line per
+    item (``label: [i/n] item``), which a log keeps and a bar's carriage returns would garble.
+    """
+
+    def __init__(self, label: str, total: int, *, stream=None) -> None:
+        self.label, self.total, self.index = label, total, 0
+        self.stream = sys.stderr if stream is None else stream
+        self.bar = tqdm(
+            total=total, desc=label, file=self.stream, leave=False, disable=None, unit="robot"
+        )
+
+    def start(self, item: str) -> None:
+        """The next item begins."""
+        self.index += 1
+        if self.bar.disable:
+            print(f"{self.label}: [{self.index}/{self.total}] {item}", file=self.stream)
+        else:
+            if self.index > 1:
+                self.bar.update(1)
+            self.bar.set_postfix_str(item)
+
+    def close(self) -> None:
+        """Remove the bar."""
+        self.bar.close()

@@ -6,7 +6,14 @@ import argparse
 import sys
 
 from gimwatch.cli._batch import expand_specs
-from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
+from gimwatch.cli._format import (
+    add_base_arguments,
+    add_mjcf_arguments,
+    non_negative_int,
+    positive_int,
+    table,
+)
+from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.metrics.analyze import analyze, choose_path
@@ -51,7 +58,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         nargs="+",
         metavar="Q",
-        help="configuration: nq numbers, a continuous joint by its angle (rad); default: neutral",
+        help="configuration: nq numbers, a continuous joint by its angle (rad); for MJCF, "
+        "MuJoCo's qpos; default: neutral",
     )
     parser.add_argument(
         "--random",
@@ -61,6 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the random draws")
     add_base_arguments(parser)
+    add_mjcf_arguments(parser)
     add_output_arguments(parser, what="configurations")
     parser.add_argument(
         "--backend",
@@ -68,6 +77,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="auto",
         help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; fixed "
         f"base); auto: denoc above nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
+    )
+    # --explain (issue 25): the modes of λmin and λmax at each configuration, dense path only
+    parser.add_argument(
+        "--explain",
+        action="store_true",
+        help="also explain kappa: the joints and bodies of the lambda_min and lambda_max modes",
     )
     parser.add_argument(
         "--metrics",
@@ -86,10 +101,15 @@ def run(args: argparse.Namespace) -> int:
     if len(specs) == 1:
         analysis = _analysis(specs[0], args)
         _notes(analysis)
+        if args.explain:
+            return _print_explained(specs[0], analysis, args)
         return _print_one(analysis, args)
+    if args.explain:
+        raise InputError("--explain", "used with one robot", f"{len(specs)} robots")
     blocks: list[tuple[str, object, str]] = []
-    for i, spec in enumerate(specs, 1):
-        print(f"analyze: [{i}/{len(specs)}] {spec}", file=sys.stderr)
+    progress = ItemProgress("analyze", len(specs))
+    for spec in specs:
+        progress.start(spec)
         try:
             analysis = _analysis(spec, args)
         except GimwatchError as exc:
@@ -97,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
             continue
         _notes(analysis)
         blocks.append((spec, analysis, ""))
+    progress.close()
     _print_batch(blocks, args)
     return 2 if any(reason for _, _, reason in blocks) else 0
 
@@ -107,6 +128,8 @@ def _analysis(spec: str, args: argparse.Namespace):
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
     if linear and args.floating:
         raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
+    if args.explain and (linear or args.csv):
+        raise InputError("--explain", "used on the dense path, without --csv", True)
     return analyze(
         spec,
         args.q,
@@ -116,6 +139,8 @@ def _analysis(spec: str, args: argparse.Namespace):
         backend=args.backend,
         metrics=None if args.metrics is None else args.metrics.split(","),
         key="--q",
+        body=args.body,
+        armature=not args.no_armature,
     )
 
 
@@ -222,3 +247,30 @@ def _print_batch(blocks, args: argparse.Namespace) -> None:
     print(
         f"{len(blocks) - refused}/{len(blocks)} analysed" + (f", {refused} refused" * bool(refused))
     )
+
+
+def _print_explained(spec: str, analysis, args: argparse.Namespace) -> int:
+    """``--explain``: the analysis, and the modes of λmin and λmax at each configuration."""
+    from gimwatch.cli.explain import mode_lines
+    from gimwatch.explain.modes import gim_modes
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot(
+        spec,
+        floating=analysis.floating,
+        max_nv=DATA_NV_LIMIT,
+        body=args.body,
+        armature=not args.no_armature,
+    )
+    modes = [gim_modes(robot, r.q) for r in analysis.results]
+    if args.json:
+        records = [
+            {**r, "modes": m.to_dict()} for r, m in zip(_records(analysis), modes, strict=True)
+        ]
+        print(json_text({**_header(analysis), "configurations": records}))
+        return 0
+    _print_table(analysis)
+    for i, mode in enumerate(modes):
+        for line in mode_lines(mode):
+            print(f"config {i}: {line}")
+    return 0

@@ -13,7 +13,14 @@ import argparse
 import sys
 
 from gimwatch.cli._batch import expand_specs, load_each
-from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
+from gimwatch.cli._format import (
+    add_base_arguments,
+    add_mjcf_arguments,
+    non_negative_int,
+    positive_int,
+    table,
+)
+from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.crosscheck import (
     DEFAULT_TOLERANCE,
@@ -38,6 +45,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--seed", type=non_negative_int, default=0, help="seed of the random states"
     )
     add_base_arguments(parser)
+    add_mjcf_arguments(parser)
     parser.add_argument(
         "--tolerance",
         type=float,
@@ -131,15 +139,18 @@ def run(args: argparse.Namespace) -> int:
     check_tolerance(args.tolerance, "--tolerance")
     everything = "all" in args.robots
     specs = list(example_robot_names()) if everything else expand_specs(args.robots)
+    mjcf = {"body": args.body, "armature": not args.no_armature}
     if len(specs) == 1 and not everything:  # one robot: bad input is one error line
-        loaded = iter([(specs[0], load_robot(specs[0], floating=args.floating), None)])
+        robot = load_robot(specs[0], floating=args.floating, **mjcf)
+        loaded = iter([(specs[0], robot, None)])
     else:
-        loaded = load_each(specs, floating=args.floating)
+        loaded = load_each(specs, floating=args.floating, **mjcf)
     results: list = []
+    progress = ItemProgress("crosscheck", len(specs)) if len(specs) > 1 else None
     try:
-        for i, (spec, robot, error) in enumerate(loaded, 1):
-            if len(specs) > 1:
-                print(f"crosscheck: [{i}/{len(specs)}] {spec}", file=sys.stderr)
+        for spec, robot, error in loaded:
+            if progress is not None:
+                progress.start(spec)
             if robot is None:
                 if everything:
                     reason = getattr(error, "problem", str(error))
@@ -162,9 +173,13 @@ def run(args: argparse.Namespace) -> int:
                     raise
                 results.append(_refusal_record(spec, str(exc)))
     except KeyboardInterrupt:
+        if progress is not None:
+            progress.close()
         if results:
             _print(results, args)
         raise
+    if progress is not None:
+        progress.close()
     if results:
         _print(results, args)
     return _status(results)

@@ -92,7 +92,7 @@ def _robot_configurations(robot, q, random, seed, key, spec) -> list:
     return _configurations(q, random, seed, robot.nq, neutral, draw, robot, key=key, spec=spec)
 
 
-def _linear(spec, q, random, seed, metrics, floating, key) -> list[GimAnalysis]:
+def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> list[GimAnalysis]:
     """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
     from gimwatch.denoc import DenocModel
     from gimwatch.metrics.linear_analysis import (
@@ -120,7 +120,11 @@ def _linear(spec, q, random, seed, metrics, floating, key) -> list[GimAnalysis]:
             spec=spec,
         )
     else:
-        robot = load_robot(spec)
+        robot = load_robot(spec, body=body, armature=armature)
+        if not robot.urdf_xml or np.any(np.asarray(robot.model.armature)):
+            raise InputError(
+                "backend denoc", "a URDF tree of hinges and slides without armature", spec
+            )
         model = DenocModel.from_urdf(
             robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
         )
@@ -139,6 +143,8 @@ def analyze(
     backend: str = "auto",
     metrics: Sequence[str] | None = None,
     key: str = "q",
+    body: str = "",
+    armature: bool = True,
 ) -> Analysis:
     """Analyse ``spec`` (``chain:N``, a URDF or MJCF path, an example-robot-data name).
 
@@ -152,6 +158,8 @@ def analyze(
         backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see `choose_path`.
         metrics: On the O(n) path, a subset of its metrics; the dense path computes all.
         key: The name of ``q`` in error messages (``--q`` for the CLI).
+        body: MJCF only: analyse the subtree of this body (see `load_robot`).
+        armature: MJCF only: keep MuJoCo's ``dof_armature`` in M.
 
     Returns:
         The `Analysis`: the results and the path taken.
@@ -163,9 +171,11 @@ def analyze(
         raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
     placeholders: tuple[str, ...] = ()
     if path == "denoc":
-        results = _linear(spec, q, random, seed, metrics, floating, key)
+        results = _linear(spec, q, random, seed, metrics, floating, key, body, armature)
     else:
-        robot = load_robot(spec, floating=floating, max_nv=DATA_NV_LIMIT)
+        robot = load_robot(
+            spec, floating=floating, max_nv=DATA_NV_LIMIT, body=body, armature=armature
+        )
         qs = _robot_configurations(robot, q, random, seed, key, spec)
         data = robot.new_data()
         results = [analyze_configuration(robot, np.asarray(x), data=data) for x in qs]

@@ -246,7 +246,7 @@ class KappaTracked(Metric):
     def __call__(self, state):
         if self.tracker is None:
             from gimwatch.metrics.tracker import KappaTracker
-            from gimwatch.metrics.tracker_providers import gim_products
+            from gimwatch.metrics.tracker.providers import gim_products
 
             provider = state.lean or gim_products(state.robot, state.dynamics, state.data)
             self.tracker = KappaTracker(provider, state.robot.nv)

@@ -135,7 +135,7 @@ class Watch:
         elif robot is None:
             self.lean = dynamics if hasattr(dynamics, "diagonal_ratio") else None
         elif readable or getattr(dynamics, "lean", None) is not None:
-            from gimwatch.metrics.tracker_providers import lean_model
+            from gimwatch.metrics.tracker.providers import lean_model
 
             self.lean = lean_model(robot, dynamics)
         self._set_alarm(alarm_metric, alarm_threshold, on_alarm, warn)

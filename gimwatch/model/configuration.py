@@ -14,6 +14,9 @@ quaternion (nq = 4, nv = 3). A user writes q in *user coordinates*:
 * a mapping ``{joint: value}`` — one-coordinate joints by name (a continuous joint by its
   angle); joints not named stay at the default.
 
+For a robot read from MJCF a list is MuJoCo's ``qpos`` (its nq numbers, quaternions as
+(w, x, y, z)), mapped by `gimwatch.model.mjcf_coordinates.q_from_qpos`.
+
 Every unit-norm block (a continuous joint's (cos, sin), a quaternion) must have norm 1
 within `UNIT_TOLERANCE` and is then normalised; a zero or far-from-unit block is
 refused naming the joint. Errors are built by the caller's ``error(key, problem)``, so the
@@ -29,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import GimwatchError
+from gimwatch.model.mjcf_coordinates import q_from_qpos
 from gimwatch.model.robots import Robot
 
 __all__ = [
@@ -112,9 +116,12 @@ def _angle_block(kind: str, values: np.ndarray) -> np.ndarray:
     return values
 
 
-def _check_units(robot: Robot, q: np.ndarray, key: str, error: ErrorFactory) -> np.ndarray:
+def _check_units(
+    robot: Robot, q: np.ndarray, key: str, error: ErrorFactory, *, mujoco: bool = False
+) -> np.ndarray:
     """Normalise every unit block of a full-length q, refusing those far from norm 1."""
     model = robot.model
+    order = "(qw, qx, qy, qz)" if mujoco else "(qx, qy, qz, qw)"
     for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
         kind, start = _kind(joint), joint.idx_q
         if kind == "continuous":
@@ -125,7 +132,7 @@ def _check_units(robot: Robot, q: np.ndarray, key: str, error: ErrorFactory) -> 
             )
         elif kind in ("free-flyer", "spherical"):
             tail = slice(start + joint.nq - 4, start + joint.nq)
-            q[tail] = _unit(q[tail], name, "quaternion (qx, qy, qz, qw)", key, error)
+            q[tail] = _unit(q[tail], name, f"quaternion {order}", key, error)
     return q
 
 
@@ -174,6 +181,10 @@ def user_configuration(
         if not np.all(np.isfinite(flat)):
             raise error(key, f"must be finite, got {flat.tolist()!r}")
         size = user_size(robot)
+        if robot.mujoco_joints:  # MJCF: MuJoCo's qpos, quaternions (w, x, y, z)
+            if flat.size != model.nq:
+                raise error(key, f"must have {model.nq} values (MuJoCo's qpos), got {flat.size}")
+            return _check_units(robot, q_from_qpos(model, flat), key, error, mujoco=True)
         if flat.size == model.nq:  # Pinocchio's own coordinates, unit blocks checked
             return _check_units(robot, flat.copy(), key, error)
         if flat.size != size:

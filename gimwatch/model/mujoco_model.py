@@ -9,8 +9,10 @@ for M(q): its own parser, its own tree and its own CRBA (``mj_fullM`` after
   inertias exact: no inertia balancing, no mass or inertia bounds (unless ``inertia_floor``
   is given), no fused static bodies. A floating base gets ``<freejoint name="root_joint"/>``
   on the root link (the link Pinocchio's free-flyer moves).
-* MJCF robots: the file as written (its own compiler settings and armature; Pinocchio reads
-  armature too and adds it to M), with a free joint on the first body when floating.
+* MJCF robots: the file compiled by MuJoCo as gimwatch read it
+  (`gimwatch.model.mjcf_compiled.compile_mjcf`), joints matched by MuJoCo's joint ids
+  (`gimwatch.model.mjcf_coordinates` maps the coordinates); when the robot was loaded
+  with ``armature=False``, ``dof_armature`` is taken off MuJoCo's diagonal too.
 
 Coordinates are mapped joint by joint, by name: revolute/prismatic angle ↔ hinge/slide;
 a continuous joint's (cos θ, sin θ) ↔ hinge angle θ; Pinocchio's quaternion (x, y, z, w)
@@ -29,7 +31,6 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError, RobotError
 from gimwatch.model.captured_output import captured_c_output
-from gimwatch.model.mjcf_model import with_free_joint
 from gimwatch.model.robots import Robot
 
 __all__ = ["MujocoRefusal", "compile_robot", "compile_urdf", "mass_matrix", "pinocchio_mass_matrix"]
@@ -107,14 +108,13 @@ def compile_robot(robot: Robot):
     """
     if not robot.mjcf_xml:
         return compile_urdf(robot.urdf_xml, floating=robot.floating, spec=robot.spec)
-    mujoco = _import_mujoco()
+    from gimwatch.model.mjcf_compiled import compile_mjcf
 
-    xml = with_free_joint(robot.mjcf_xml, robot.source) if robot.floating else robot.mjcf_xml
-    try:
-        with captured_c_output(1), captured_c_output(2):
-            return mujoco.MjModel.from_xml_string(xml)
-    except ValueError as exc:
-        raise _refusal(robot.spec, exc) from exc
+    _import_mujoco()
+    mj_model = compile_mjcf(robot.source, floating=robot.floating)
+    if mj_model.ntendon:  # MuJoCo adds tendon armature to M; gimwatch leaves it out (warned)
+        mj_model.tendon_armature[:] = 0.0
+    return mj_model
 
 
 def _joint_maps(robot: Robot, mj_model, q: np.ndarray, mj_q: np.ndarray, T: np.ndarray) -> None:
@@ -165,9 +165,30 @@ def pinocchio_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
         RobotError: A joint of the robot has no MuJoCo joint of the same name, or the two
             models have different numbers of velocity coordinates.
     """
-    if mj_model.nv != robot.nv:
+    if mj_model.nv != robot.nv and not robot.mujoco_joints:
         raise RobotError(robot.spec, f"MuJoCo has nv = {mj_model.nv}, Pinocchio nv = {robot.nv}")
+    q = np.asarray(q, dtype=float)
+    if robot.mujoco_joints:
+        return _mjcf_mass_matrix(robot, mj_model, q)
     mj_q = np.array(mj_model.qpos0, dtype=float)
     T = np.zeros((mj_model.nv, robot.nv))
-    _joint_maps(robot, mj_model, np.asarray(q, dtype=float), mj_q, T)
+    _joint_maps(robot, mj_model, q, mj_q, T)
     return T.T @ mass_matrix(mj_model, mj_q) @ T
+
+
+def _mjcf_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
+    """MuJoCo's M restricted to the robot's DoFs (a subtree, or all), in gimwatch's v."""
+    from gimwatch.model.mjcf_coordinates import qpos_from_q, velocity_map
+
+    mj_q = np.array(mj_model.qpos0, dtype=float)
+    qpos = qpos_from_q(robot.model, q)
+    dofs = []
+    for joint, j in zip(robot.model.joints[1:], robot.mujoco_joints, strict=True):
+        start = int(mj_model.jnt_qposadr[j])
+        mj_q[start : start + joint.nq] = qpos[joint.idx_q : joint.idx_q + joint.nq]
+        dofs.extend(range(int(mj_model.jnt_dofadr[j]), int(mj_model.jnt_dofadr[j]) + joint.nv))
+    M = mass_matrix(mj_model, mj_q)[np.ix_(dofs, dofs)]
+    if not robot.mjcf_armature:
+        M -= np.diag(np.asarray(mj_model.dof_armature, dtype=float)[dofs])
+    T = velocity_map(robot.model, q)
+    return T.T @ M @ T

@@ -4,12 +4,13 @@ A specification is one of:
 
 * ``chain:N`` — the paper's chain of N slender rods (2.2 kg, 1 m), generated on the fly;
 * a path to a URDF file;
-* a path to an MJCF file (``.xml`` whose root element is ``<mujoco>``), read by
-  Pinocchio's MJCF parser (``pinocchio.buildModelFromMJCF``);
+* a path to an MJCF file (``.xml`` whose root element is ``<mujoco>``), compiled by MuJoCo
+  and rebuilt in Pinocchio from the compiled model (`gimwatch.model.mjcf_compiled`);
 * the name of a robot in example-robot-data (``ur5``, ``panda``, ``talos_arm``, ...).
 
-DeNOC reads URDF only: an MJCF robot has ``urdf_xml == ""`` and its text in ``mjcf_xml``;
-``gimwatch crosscheck`` then compares Pinocchio with MuJoCo (docs/robots.md).
+An MJCF robot keeps its file's text in ``mjcf_xml``; its ``urdf_xml`` is URDF text written
+from the compiled model when DeNOC can read the tree (hinges and slides on one tree, at most
+a free joint at its root), else "" (docs/robots.md).
 
 The base is the one example-robot-data's loader gives a robot of its own (a free-flyer for
 legged robots, humanoids and drones, as ``example_robot_data.load(name)`` builds them; see
@@ -43,8 +44,7 @@ from gimwatch.model.example_robots import (
     example_robot_names,
     example_robot_urdf,
 )
-from gimwatch.model.mjcf_model import build_mjcf_model, is_mjcf
-from gimwatch.model.mjcf_values import check_mjcf
+from gimwatch.model.mjcf_model import is_mjcf
 from gimwatch.model.sampling import (
     PLACEHOLDER_LIMIT,
     check_random_budget,
@@ -92,7 +92,10 @@ class Robot:
         source: Where the URDF came from (a path, or ``"<generated chain_N>"``).
         floating: Whether a free-flyer root joint was added.
         chain: The chain spec for generated chains, else None.
-        mjcf_xml: The MJCF text for robots read from MJCF (then ``urdf_xml`` is ""), else "".
+        mjcf_xml: The MJCF text for robots read from MJCF, else "".
+        mjcf_body: For MJCF, the body whose subtree was selected ("" for the whole model).
+        mjcf_armature: For MJCF, whether MuJoCo's ``dof_armature`` is in M (as in MuJoCo).
+        mujoco_joints: For MJCF, MuJoCo's joint id of each Pinocchio joint, else ().
     """
 
     name: str
@@ -103,6 +106,9 @@ class Robot:
     floating: bool = False
     chain: ChainSpec | None = None
     mjcf_xml: str = ""
+    mjcf_body: str = ""
+    mjcf_armature: bool = True
+    mujoco_joints: tuple[int, ...] = ()
     dof_names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -254,21 +260,27 @@ def _too_deep(spec: str) -> RobotError:
     )
 
 
-def _mjcf_robot(xml: str, source: str, name: str, spec: str, floating: bool) -> Robot:
-    check_mjcf(xml, source)
-    model = build_mjcf_model(source, floating, xml)
+def _mjcf_robot(
+    xml: str, source: str, name: str, spec: str, floating: bool, body: str, armature: bool
+) -> Robot:
+    from gimwatch.model.mjcf_robot import read_mjcf
+
+    model, joint_ids, urdf_xml = read_mjcf(source, floating=floating, body=body, armature=armature)
     if model.nv == 0:
         raise RobotError(
             spec, "has no degree of freedom with a fixed base; load it with a floating base"
         )
     return Robot(
-        name=name,
+        name=f"{name}[{body}]" if body else name,  # reports say which subtree was read
         spec=spec,
         model=model,
-        urdf_xml="",
+        urdf_xml=urdf_xml,
         source=source,
         floating=floating,
         mjcf_xml=xml,
+        mjcf_body=body,
+        mjcf_armature=armature,
+        mujoco_joints=joint_ids,
     )
 
 
@@ -296,7 +308,12 @@ def default_floating(spec: str | Path) -> bool:
 
 
 def load_robot(
-    spec: str | Path, floating: bool | None = None, *, max_nv: int | None = None
+    spec: str | Path,
+    floating: bool | None = None,
+    *,
+    max_nv: int | None = None,
+    body: str = "",
+    armature: bool = True,
 ) -> Robot:
     """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
 
@@ -307,6 +324,9 @@ def load_robot(
             (a free-flyer for ``anymal``, ``solo12``, ``talos``, ...), fixed otherwise.
         max_nv: Refuse generated chains with more velocity coordinates than this before
             building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
+        body: MJCF only: read the subtree of this body (its ancestors held at ``qpos0``)
+            instead of the whole model.
+        armature: MJCF only: keep MuJoCo's ``dof_armature`` in M (False leaves it out).
 
     Returns:
         The loaded [`Robot`][gimwatch.model.robots.Robot].
@@ -337,11 +357,13 @@ def load_robot(
         path = Path(text)
         xml, source, name = _read_urdf(path), str(path), path.stem
         if is_mjcf(xml):
-            return _mjcf_robot(xml, source, name, text, floating)
+            return _mjcf_robot(xml, source, name, text, floating, body, armature)
     else:
         close = difflib.get_close_matches(text, example_robot_loaders(), n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
+    if body:
+        raise InputError("--body", "given only with an MJCF file", body)
     model, xml = _build_model(xml, source, floating)
     if model.nv == 0:
         raise RobotError(

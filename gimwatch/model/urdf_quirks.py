@@ -15,13 +15,13 @@ and listed in one [`URDFWarning`][gimwatch.errors.URDFWarning] per file:
 * joint limits: a negative ``effort``/``velocity`` ("unlimited", e.g. ``effort="-1"``) or a
   missing one (read as 0), a missing ``<limit>`` on a revolute or prismatic joint, and
   ``lower > upper`` (Bullet's "no limit"): the position range becomes the placeholder
-  ±:data:`~gimwatch.model.sampling.PLACEHOLDER_LIMIT` (random draws use ±π rad / ±1 m);
+  ±`gimwatch.model.sampling.PLACEHOLDER_LIMIT` (random draws use ±π rad / ±1 m);
 * an empty ``<dynamics/>`` (removed; damping and friction do not enter M);
 * a ``<mimic>`` of a fixed joint: the follower would stay at its offset; like every mimic
   joint it is modelled as an independent joint, as Pinocchio does.
 
 What makes M undefined or wrong is still refused by the value checks
-(:mod:`gimwatch.model.urdf_values`): non-finite or unparsable numbers in origins, axes and
+(`gimwatch.model.urdf_values`): non-finite or unparsable numbers in origins, axes and
 inertials, negative masses, non-positive-semi-definite inertias, unknown joint types.
 Every scan here is linear in the size of the text.
 """

@@ -167,10 +167,10 @@ def check_urdf(xml: str, source: str) -> ET.Element:
 
 
 def check_urdf_text(xml: str, source: str, *, stacklevel: int = 1) -> tuple[ET.Element, str]:
-    """:func:`check_urdf`, and the text for parsers.
+    """`check_urdf`, and the text for parsers.
 
     That is ``xml`` itself or, when real-world conventions were normalised
-    (:mod:`gimwatch.model.urdf_quirks`, one warning), the normalised document, so that
+    (`gimwatch.model.urdf_quirks`, one warning), the normalised document, so that
     Pinocchio, DeNOC and MuJoCo read the same robot.
     """
     root, fixes = _parse(xml, source)

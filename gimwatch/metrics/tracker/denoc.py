@@ -1,15 +1,15 @@
 """The κ tracker on DeNOC's compiled model: one compiled call per warm sample, shift-invert λmin.
 
-[`DenocEnds`][gimwatch.metrics.tracker_denoc.DenocEnds] holds the tracker's own DeNOC buffers (the
+[`DenocEnds`][gimwatch.metrics.tracker.denoc.DenocEnds] holds the tracker's own DeNOC buffers (the
 LeanModel it was given keeps its configuration) and the state carried from sample to sample: each
 end's Ritz block, the last λmin and its last relative change. A warm sample is ONE compiled call,
-[`warm_sample`][gimwatch.metrics.tracker_denoc.warm_sample]: kinematics at q (Shah & Saha's DeNOC,
+[`warm_sample`][gimwatch.metrics.tracker.denoc.warm_sample]: kinematics at q (Shah & Saha's DeNOC,
 `gimwatch.denoc.fused`), Lanczos on M·x for λmax, the articulated factor of M − σ·1 with σ =
 λmin(previous)·(1 − s) (refactored with s × 100 while a pivot is not positive — Sylvester's law of
 inertia: then λmin ≤ σ — up to s = 1, the plain M⁻¹), and Lanczos on (M − σ·1)⁻¹ for λmin = σ + 1/θ.
 Cold starts (the first sample, and the detected failures of a warm one) run the same
 compiled pieces from Python: λmin first to 1e-7 on M⁻¹, then shift-invert to the tolerance.
-See [`gimwatch.metrics.tracker`][gimwatch.metrics.tracker] for the method and its stopping rule.
+See [`core`][gimwatch.metrics.tracker.core] for the method and its stopping rule.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import numpy as np
 from gimwatch.denoc import fused
 from gimwatch.errors import ConditioningError
 from gimwatch.jit import njit
-from gimwatch.metrics.tracker_krylov import Workspace, leading
+from gimwatch.metrics.tracker.krylov import Workspace, leading
 
 __all__ = ["DenocEnds", "warm_sample"]
 
@@ -29,6 +29,10 @@ _SHIFT_MIN = 1e-8  # smallest relative shift margin s: above λmin's own toleran
 _ROUND = 12  # products per round of the cold start's shift refinement
 _APPROACH = 0.1  # each round moves σ to λ − 0.1 (λ − σ), λ the round's Ritz estimate
 _PROBES = 16  # seeded probe vectors, used in turn
+#: λmin is certified at every sample: M − λ(1 − CERTIFY·rtol)·1 must factor with positive
+#: pivots (Sylvester: no eigenvalue below that shift). Ritz values lie above λmin, so the
+#: reported λ is then within CERTIFY·rtol of λmin (relative), whatever Lanczos converged to.
+CERTIFY = 100.0
 
 
 @njit(cache=True)
@@ -66,13 +70,13 @@ def warm_sample(
         state: [λmax, λmin, last relative change of λmin, probes used], updated in place when
             both ends succeed.
         params: [rtol, warm product budget, jump].
-        V: Krylov workspace ([`Workspace`][gimwatch.metrics.tracker_krylov.Workspace]), with AV,
+        V: Krylov workspace ([`Workspace`][gimwatch.metrics.tracker.krylov.Workspace]), with AV,
             H and vectors.
         AV: See V.
         H: See V.
         vectors: See V.
         stats: Receives the results
-            ([`DenocEnds.sample`][gimwatch.metrics.tracker_denoc.DenocEnds.sample]).
+            ([`DenocEnds.sample`][gimwatch.metrics.tracker.denoc.DenocEnds.sample]).
     """
     rtol, budget, jump = params[0], int(params[1]), params[2]
     used = int(state[3])
@@ -205,10 +209,56 @@ class DenocEnds:
             sigma = trial
             starts = np.vstack([self._probe(), self._starts[1][:-1]])
 
+    def _certified(self, low: float, tracker) -> bool:
+        """Whether no eigenvalue of M lies below low·(1 − CERTIFY·rtol) (one O(n) factor)."""
+        return bool(fused.factor_shifted(low * (1.0 - CERTIFY * tracker.rtol), *self._model))
+
+    def _certified_cold_low(self, tracker) -> tuple[float, float, int, int]:
+        """λmin from a cold start, certified; (λmin, estimate, products, factorizations).
+
+        Raises:
+            ConditioningError: It did not converge, or an eigenvalue lies below it still
+                (the tracker then uses its dense fallback when it has one).
+        """
+        low, estimate, ok, used, factors = self._cold_low(tracker)
+        if not ok:
+            raise ConditioningError(f"λmin did not converge in {tracker.max_products} products")
+        factors += 1
+        if self._certified(low, tracker):
+            return low, estimate, used, factors
+        return self._bisected_low(low * (1.0 - CERTIFY * tracker.rtol), tracker, used, factors)
+
+    def _bisected_low(self, upper: float, tracker, used: int, factors: int):
+        """λmin below ``upper`` by Sylvester bisection, then Lanczos just below it.
+
+        The Ritz block and the probes may all miss the lowest mode (a crossing with a mode
+        localised elsewhere in the tree): pivot signs cannot. Bisection on the shift brackets
+        λmin in [lo, hi) to 1e-3 relative (a positive factor at lo, not at hi); Lanczos on
+        (M − lo·1)⁻¹, where λmin now dominates, gives it and its eigenvector for the next
+        warm start. Should that still not certify, the bisection goes on to the tolerance.
+        """
+        lo, hi, margin = 0.0, upper, CERTIFY * tracker.rtol
+        while hi - lo > 1e-3 * hi:
+            mid, factors = 0.5 * (lo + hi), factors + 1
+            lo, hi = (mid, hi) if fused.factor_shifted(mid, *self._model) else (lo, mid)
+        fused.factor_shifted(lo, *self._model)
+        starts = np.vstack([self._probe(), self._starts[1][:-1]])
+        theta, estimate, ok, spent = self._leading(
+            1, starts, lo, tracker.rtol, tracker.max_products, 1
+        )
+        used, factors = used + spent, factors + 2
+        low = lo + 1.0 / theta
+        if ok and low < hi and self._certified(low, tracker):
+            return low, estimate, used, factors
+        while hi - lo > 0.5 * margin * hi:
+            mid, factors = 0.5 * (lo + hi), factors + 1
+            lo, hi = (mid, hi) if fused.factor_shifted(mid, *self._model) else (lo, mid)
+        return hi, (hi - lo) / hi, used, factors
+
     def sample(self, q: np.ndarray, tracker) -> list:
         """[(λmax, products, fallback, estimate), (λmin, …), factorizations] at q.
 
-        ``stats`` after [`warm_sample`][gimwatch.metrics.tracker_denoc.warm_sample]: λmax, its
+        ``stats`` after [`warm_sample`][gimwatch.metrics.tracker.denoc.warm_sample]: λmax, its
         estimate, converged, products (0–3); the same for λmin (4–7); σ, factorizations, M positive
         definite (8–10); a fallback is needed (11), for λmax (12), for λmin (13).
         """
@@ -223,7 +273,13 @@ class DenocEnds:
         top, e_top, _, n_top, low, e_low, _, n_low, _, factors, definite, cold = stats[:12].tolist()
         n_top, n_low, factors = int(n_top), int(n_low), int(factors)
         if not cold:
-            return [(top, n_top, "", e_top), (low, n_low, "", e_low), factors]
+            if self._certified(low, tracker):
+                return [(top, n_top, "", e_top), (low, n_low, "", e_low), factors + 1]
+            # an eigenvalue below the tracked one (a crossing the warm block missed)
+            low, e_low, n_more, more = self._certified_cold_low(tracker)
+            previous = self._state[1]
+            self._state[:3] = top, low, abs(low - previous) / low
+            return [(top, n_top, "", e_top), (low, n_low + n_more, "cold", e_low), factors + more]
         if not definite:
             raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
         fb_top = fb_low = ""
@@ -233,12 +289,11 @@ class DenocEnds:
             n_top += used
             if not ok:
                 raise ConditioningError(f"λmax did not converge in {tracker.max_products} products")
-        if stats[13]:
+        if stats[13] or not self._certified(low, tracker):
             fb_low = "cold"
-            low, e_low, ok, used, more = self._cold_low(tracker)
+            low, e_low, used, more = self._certified_cold_low(tracker)
             n_low, factors = n_low + used, factors + more
-            if not ok:
-                raise ConditioningError(f"λmin did not converge in {tracker.max_products} products")
+        factors += 1
         previous = self._state[1]
         self._state[:3] = top, low, abs(low - previous) / low
         return [(top, n_top, fb_top, e_top), (low, n_low, fb_low, e_low), factors]
@@ -248,8 +303,8 @@ class DenocEnds:
         model = self._model
         fused.kinematics(q, model[0], self._geometry, *model[1:5])
         top, e_top, ok_top, n_top = self._cold(0, 0.0, tracker.rtol, tracker.max_products)
-        low, e_low, ok_low, n_low, factors = self._cold_low(tracker)
-        if not (ok_top and ok_low):
+        low, e_low, n_low, factors = self._certified_cold_low(tracker)
+        if not ok_top:
             raise ConditioningError(
                 f"the κ tracker did not converge in {tracker.max_products} products "
                 "and has no dense fallback"

@@ -1,7 +1,7 @@
 """The κ tracker's Krylov engine: thick-restart Lanczos for the leading eigenpair, compiled.
 
-One routine, [`leading`][gimwatch.metrics.tracker_krylov.leading], serves every operator of
-[`gimwatch.metrics.tracker`][gimwatch.metrics.tracker]: the caller passes a block of start vectors
+One routine, [`leading`][gimwatch.metrics.tracker.krylov.leading], serves every operator of
+the [`tracker`][gimwatch.metrics.tracker.core]: the caller passes a block of start vectors
 (the warm start), and the basis grows Lanczos-style — each new vector is A times the previous one,
 orthogonalised twice against the basis (CGS2). Every ``check_every`` products, Rayleigh–Ritz on the
 whole basis gives the leading Ritz pair (θ, y) and its residual r = A y − θ y, which restarts the
@@ -16,7 +16,7 @@ converged when ‖r‖² / (θ · gap · (1 + σθ)) ≤ rtol.
 The operator is either DeNOC's compiled products, called from inside the loop (no Python per
 product: ``which`` = 0 for M·x, 1 for (M − σ·1)⁻¹ y on the factor of
 `gimwatch.denoc.fused.factor_shifted`), or, for other providers, a Python callable
-([`leading_python`][gimwatch.metrics.tracker_krylov.leading_python]). Vectors are rows: ``V[j]`` is
+([`leading_python`][gimwatch.metrics.tracker.krylov.leading_python]). Vectors are rows: ``V[j]`` is
 basis vector j, contiguous.
 """
 
@@ -223,7 +223,7 @@ def leading(
         budget: Most products to spend.
         keep: Ritz vectors to return (and to thick-restart on).
         check_every: Products between two Rayleigh–Ritz checks.
-        V: (size, n) basis workspace ([`Workspace`][gimwatch.metrics.tracker_krylov.Workspace]).
+        V: (size, n) basis workspace ([`Workspace`][gimwatch.metrics.tracker.krylov.Workspace]).
         AV: (size, n) products of the basis.
         H: (size, size) projected matrix.
         vectors: (3, n) scratch.

@@ -4,7 +4,7 @@ Shah & Saha (2013) propose δ and αδ because κ₂ = λmax/λmin (Eq. 6) by a 
 costs O(n³). Along a trajectory M(q) changes little from one sample to the next, and so do
 its extreme eigenpairs: the previous sample's are a near-perfect start.
 [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] tracks both ends with O(n) operators and
-thick-restart Lanczos ([`gimwatch.metrics.tracker_krylov`][gimwatch.metrics.tracker_krylov]), each
+thick-restart Lanczos ([`gimwatch.metrics.tracker.krylov`][gimwatch.metrics.tracker.krylov]), each
 end started from the previous sample's Ritz block plus one fresh seeded random probe (it has a
 component on every eigenvector, so a new leading eigenvector that appeared orthogonally to the block
 keeps the residual large until the basis has found it), converged on the Kato–Temple bound ‖r‖²/(θ ·
@@ -20,6 +20,14 @@ gap) ≤ rtol of each end (κ to about 2·rtol; default rtol = 1e-10).
   where λmin and λ₂ of a long chain differ by 0.07 % — and λmin = σ + 1/θ keeps its relative
   accuracy (κ ~ 1e11 at n = 400). s follows the observed motion of λmin (10× the last
   relative change, at least 1e-8).
+* **λmin is certified at every sample** on DeNOC's model: M − λ(1 − 100·rtol)·1 must factor
+  with positive pivots, i.e. no eigenvalue lies below the reported one (Ritz values lie above
+  λmin, so it is then within 100·rtol of λmin). A warm Ritz block localised in one branch of
+  a tree cannot see a lower mode that appears in another branch (the two smallest eigenvalues
+  cross), and Lanczos converges to the old mode with a small error estimate; the certificate
+  catches it, and λmin is recovered by Sylvester bisection on the shift, then Lanczos just
+  below it (``fallback = "cold"``). One O(n) factorization more per sample (10–15 % of a
+  sample's time at n = 100–1000).
 * **λmin**, on other providers (Pinocchio's ABA, test operators): Lanczos on M⁻¹·y with a
   block of 8 Ritz vectors (the smallest eigenvalues of a long chain cluster; Rayleigh–Ritz
   on the tracked cluster resolves crossings inside it).
@@ -45,8 +53,8 @@ import scipy.linalg
 
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.metrics.conditioning import extreme_ratio
-from gimwatch.metrics.tracker_denoc import DenocEnds
-from gimwatch.metrics.tracker_krylov import Workspace, leading_python
+from gimwatch.metrics.tracker.denoc import DenocEnds
+from gimwatch.metrics.tracker.krylov import Workspace, leading_python
 
 __all__ = ["KappaTracker", "TrackedKappa", "track_kappa"]
 
@@ -101,7 +109,7 @@ class KappaTracker:
             ``gim_solve(y)`` (M⁻¹·y) at the configured q: a
             [`gimwatch.denoc.lean.LeanModel`][gimwatch.denoc.LeanModel] (``DenocModel.lean()``:
             compiled, with shift-invert for λmin), or
-            [`PinocchioProducts`][gimwatch.metrics.tracker_providers.PinocchioProducts].
+            [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts].
         nv: Size of M.
         rtol: Relative tolerance on each extreme eigenvalue (the stopping rule).
         warm_products: Products per end the warm start may take before it counts as failed.

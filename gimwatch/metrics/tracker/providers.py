@@ -1,11 +1,11 @@
 """Where the κ tracker and the watch's δ get their O(n) operators from.
 
-* [`lean_model`][gimwatch.metrics.tracker_providers.lean_model] — DeNOC's compiled
+* [`lean_model`][gimwatch.metrics.tracker.providers.lean_model] — DeNOC's compiled
   [`LeanModel`][gimwatch.denoc.LeanModel] of a robot (the backend's when it has one, else built once
   from the chain spec or the URDF), or None when DeNOC cannot read the robot;
-* [`gim_products`][gimwatch.metrics.tracker_providers.gim_products] — that model, or else
-  [`PinocchioProducts`][gimwatch.metrics.tracker_providers.PinocchioProducts];
-* [`PinocchioProducts`][gimwatch.metrics.tracker_providers.PinocchioProducts] — ``M(q) x = RNEA(q,
+* [`gim_products`][gimwatch.metrics.tracker.providers.gim_products] — that model, or else
+  [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts];
+* [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts] — ``M(q) x = RNEA(q,
   0, x)`` and ``M(q)⁻¹ y = ABA(q, 0, y)`` with gravity off (see
   [`gimwatch.metrics.matrix_free`][gimwatch.metrics.matrix_free]), behind the three methods
   [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] calls (``configure(q)``,

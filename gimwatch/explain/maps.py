@@ -1,0 +1,364 @@
+"""Conditioning maps: κ, δ or any scalar registry metric over a grid of two joints, or along a path.
+
+A map fixes every joint but two at a base configuration and sweeps those two over a grid.
+The grid is cut into row chunks, each a `Task`, so that a large
+map runs in this process, on local processes or on a Dask cluster (the survey's
+`run_sweep`), shows progress chunk by chunk, and keeps the
+finished rows when interrupted (the others are NaN). Two paths, as ``analyze``:
+
+* dense (``crba``): Pinocchio's CRBA per point; κ and δ of a chunk from one batched
+  eigen-solve / diagonal read, other scalar metrics through the registry on the formed M;
+* O(n) (``denoc``, chains beyond Pinocchio's Data, or asked for): DeNOC's linear-time state
+  per point (`gimwatch.metrics.linear_analysis.analyze_linear`, no M formed) for δ and
+  the backward pivot ratio, and κ by the κ tracker (`gimwatch.metrics.tracker`,
+  warm-started Lanczos, relative tolerance 1e-10 per end) along the chunk's points, visited
+  in serpentine order so that each starts from its neighbour's eigenvectors.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import pinocchio as pin
+
+from gimwatch.errors import InputError
+from gimwatch.metrics.analyze import choose_path
+from gimwatch.metrics.dense_analysis import check_massless
+from gimwatch.metrics.linear_analysis import LINEAR_METRICS
+from gimwatch.metrics.registry import METRICS, GimState, evaluate
+from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, parse_chain_spec
+from gimwatch.suggest import did_you_mean
+from gimwatch.survey.sweep import Task, run_sweep
+
+__all__ = [
+    "CHUNK_POINTS",
+    "MAX_GRID",
+    "ConditioningMap",
+    "check_metrics",
+    "conditioning_map",
+    "map_axes",
+    "metrics_at",
+    "robot_coordinates",
+    "run_chunks",
+    "scalar_metrics",
+]
+
+#: Points per side of a map at most (a 2,000 × 2,000 map is 4 million configurations).
+MAX_GRID = 2000
+#: Configurations per chunk of work (rows are grouped up to about this many points).
+CHUNK_POINTS = 4000
+
+
+def scalar_metrics(path: str) -> tuple[str, ...]:
+    """The metrics a map can hold on ``path``: scalar registry metrics (dense), or O(n) ones."""
+    if path == "denoc":
+        return LINEAR_METRICS
+    return tuple(name for name, cls in METRICS.items() if not cls.vector)
+
+
+def check_metrics(metrics: Sequence[str], path: str) -> tuple[str, ...]:
+    """``metrics`` if each is a map metric of ``path``, else an InputError naming it."""
+    allowed = scalar_metrics(path)
+    for name in metrics:
+        if name not in allowed:
+            hint = did_you_mean(name, allowed).removeprefix("; ")
+            raise InputError(
+                "--metrics", f"among {', '.join(allowed)} on the {path} path", name, hint=hint
+            )
+    if not metrics:
+        raise InputError("--metrics", "at least one metric", list(metrics))
+    return tuple(metrics)
+
+
+@functools.lru_cache(maxsize=4)
+def _robot(spec: str):
+    return load_robot(spec, max_nv=DATA_NV_LIMIT)
+
+
+@functools.lru_cache(maxsize=2)
+def _linear_model(spec: str):
+    from gimwatch.denoc import DenocModel
+
+    chain = parse_chain_spec(spec)
+    if chain is not None:
+        return DenocModel.from_chain(chain), chain.name
+    robot = load_robot(spec)
+    model = DenocModel.from_urdf(robot.urdf_xml, source=robot.source, joint_order=robot.joint_names)
+    return model, robot.name
+
+
+@functools.lru_cache(maxsize=2)
+def _lean(spec: str):
+    return _linear_model(spec)[0].lean()
+
+
+def robot_coordinates(spec: str, path: str) -> tuple[str, list[str]]:
+    """(robot name, names of the q coordinates in order) on ``path``."""
+    if path == "denoc":
+        model, name = _linear_model(spec)
+        return name, list(model.joint_names)
+    from gimwatch.output.figures import joint_coordinate_units
+
+    robot = _robot(spec)
+    return robot.name, joint_coordinate_units(robot.model)[0]
+
+
+def metrics_at(spec: str, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -> np.ndarray:
+    """The metrics at each configuration of ``qs`` (K, nq): an array (len(metrics), K).
+
+    Module-level and keyed by ``spec`` so that it can run in worker processes.
+    """
+    out = np.full((len(metrics), len(qs)), np.nan)
+    if path == "denoc":
+        from gimwatch.metrics.linear_analysis import analyze_linear
+        from gimwatch.metrics.tracker import track_kappa
+
+        model, name = _linear_model(spec)
+        others = tuple(m for m in metrics if m != "kappa") or ("diagonal_ratio",)
+        for k, q in enumerate(qs):  # δ always: it checks that every coordinate moves mass
+            record = analyze_linear(model, q, name=name, metrics=others)
+            for i, metric in enumerate(metrics):
+                if metric != "kappa":
+                    out[i, k] = getattr(record, metric)
+        if "kappa" in metrics:  # warm-started from point to point, O(n) each (metrics/tracker)
+            out[metrics.index("kappa")] = [s.kappa for s in track_kappa(_lean(spec), qs)]
+        return out
+    robot = _robot(spec)
+    data = robot.new_data()
+    Ms = np.array([pin.crba(robot.model, data, q) for q in qs])
+    diagonal = np.diagonal(Ms, axis1=1, axis2=2)
+    for row in diagonal[np.any(~(diagonal > 0), axis=1)][:1]:  # M singular: say which joints
+        check_massless(row, robot.dof_names, name=robot.name, source=robot.source)
+    rest = []
+    for i, metric in enumerate(metrics):
+        if metric == "kappa":
+            w = np.linalg.eigvalsh(Ms)
+            out[i] = w[:, -1] / w[:, 0]
+        elif metric == "diagonal_ratio":
+            diag = np.diagonal(Ms, axis1=1, axis2=2)
+            out[i] = diag.max(axis=1) / diag.min(axis=1)
+        else:
+            rest.append(i)
+    if rest:
+        names = [metrics[i] for i in rest]
+        instances: dict = {}
+        for k, M in enumerate(Ms):
+            values = evaluate(names, GimState(matrix=M), instances)
+            out[rest, k] = [values[name] for name in names]
+    return out
+
+
+@dataclass(frozen=True)
+class ConditioningMap:
+    """Metrics over a grid of two joints (rows: the second joint, columns: the first).
+
+    Attributes:
+        robot: Robot name.
+        joints: The two joints swept (x, y).
+        units: Their units (rad or m).
+        x: Values of the first joint, length nx.
+        y: Values of the second joint, length ny.
+        base_q: The configuration the other joints keep.
+        path: ``crba`` or ``denoc``.
+        values: Metric name -> array (ny, nx); NaN where an interruption left points undone.
+        interrupted: Whether Ctrl-C stopped the map early.
+    """
+
+    robot: str
+    joints: tuple[str, str]
+    units: tuple[str, str]
+    x: np.ndarray
+    y: np.ndarray
+    base_q: np.ndarray
+    path: str
+    values: dict[str, np.ndarray]
+    interrupted: bool = False
+
+
+def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int], list[str], list]:
+    """(robot name, q index, unit, (lower, upper)) of each named joint, and the neutral q.
+
+    Raises:
+        InputError: Unknown joints, a joint named twice, or a joint not of one coordinate.
+    """
+    if len(joints) != 2 or joints[0] == joints[1]:
+        raise InputError("--joints", "two different joint names", list(joints))
+    if path == "denoc":
+        model, name = _linear_model(spec)
+        names = list(model.joint_names)
+        chain = parse_chain_spec(spec)
+        kinds = chain.joint_types if chain is not None else ("revolute",) * len(names)
+        lengths = chain.lengths_m if chain is not None else (1.0,) * len(names)
+        index = {n: i for i, n in enumerate(names)}
+        units = {n: ("m" if k == "prismatic" else "rad") for n, k in zip(names, kinds, strict=True)}
+        limits = {
+            n: ((-l / 2, l / 2) if k == "prismatic" else (-math.pi, math.pi))
+            for n, k, l in zip(names, kinds, lengths, strict=True)
+        }
+        neutral = np.zeros(len(names))
+    else:
+        robot = _robot(spec)
+        model, name, names = robot.model, robot.name, list(robot.joint_names)
+        index, units, limits = {}, {}, {}
+        for j in range(1, model.njoints):
+            joint = model.joints[j]
+            if joint.nq != 1:
+                continue
+            jname, i = model.names[j], joint.idx_q
+            index[jname] = i
+            prismatic = "P" in joint.shortname().replace("JointModel", "")[:1]
+            units[jname] = "m" if prismatic else "rad"
+            lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
+            if not (np.isfinite(lo) and np.isfinite(hi) and abs(lo) < 1e3 and abs(hi) < 1e3):
+                lo, hi = (-math.pi, math.pi) if not prismatic else (-1.0, 1.0)
+            limits[jname] = (float(lo), float(hi))
+        neutral = pin.neutral(model)
+    for joint in joints:
+        if joint not in names:
+            hint = did_you_mean(joint, names).removeprefix("; ")
+            raise InputError("--joints", f"joints of {name}", joint, hint=hint)
+        if joint not in index:
+            raise InputError("--joints", "joints of one coordinate (revolute or prismatic)", joint)
+    return (
+        name,
+        [index[j] for j in joints],
+        [units[j] for j in joints],
+        [limits[j] for j in joints],
+        neutral,
+    )
+
+
+def run_chunks(
+    tasks: Sequence[Task],
+    starts: Sequence[int],
+    shape: tuple[int, ...],
+    metrics: Sequence[str],
+    *,
+    workers: int | None,
+    scheduler: str | None,
+    progress: Callable[[float], None] | None,
+) -> tuple[dict[str, np.ndarray], bool]:
+    """Run chunk tasks (each returns (len(metrics), k, ...)) into arrays of ``shape`` per metric.
+
+    Chunk ``i`` fills rows ``starts[i]`` onwards; rows of unfinished chunks stay NaN.
+
+    Returns:
+        The arrays by metric, and whether Ctrl-C interrupted the sweep.
+    """
+    done = [0]
+
+    def tick(_: int) -> None:
+        done[0] += 1
+        if progress is not None:
+            progress(done[0] / len(tasks))
+
+    outcome = run_sweep(tasks, workers=workers, scheduler=scheduler, progress=tick)
+    values = {m: np.full(shape, np.nan) for m in metrics}
+    for position, chunk in outcome.results.items():
+        s = starts[position]
+        for i, metric in enumerate(metrics):
+            values[metric][s : s + chunk.shape[1]] = chunk[i]
+    return values, outcome.interrupted
+
+
+def _grid_chunk(spec, path, axes, base_q, x, y_rows, metrics) -> np.ndarray:
+    """Metrics over rows ``y_rows`` × all of ``x``: an array (len(metrics), rows, nx).
+
+    Rows are visited back and forth (serpentine), so that consecutive configurations are
+    neighbours: the κ tracker of the O(n) path warm-starts from the previous point.
+    """
+    rows, nx = len(y_rows), len(x)
+    xs = np.tile(x, rows).reshape(rows, nx)
+    xs[1::2] = xs[1::2, ::-1]
+    qs = np.repeat(np.asarray(base_q, dtype=float)[None, :], rows * nx, axis=0)
+    qs[:, axes[0]] = xs.ravel()
+    qs[:, axes[1]] = np.repeat(y_rows, nx)
+    values = metrics_at(spec, path, qs, metrics).reshape(len(metrics), rows, nx)
+    values[:, 1::2] = values[:, 1::2, ::-1]
+    return values
+
+
+def conditioning_map(
+    spec: str,
+    joints: Sequence[str],
+    *,
+    grid: int = 50,
+    ranges: Sequence[tuple[float, float]] | None = None,
+    q: npt.ArrayLike | None = None,
+    metrics: Sequence[str] = ("kappa", "diagonal_ratio"),
+    backend: str = "auto",
+    workers: int | None = 1,
+    scheduler: str | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> ConditioningMap:
+    """Metrics of M over a ``grid`` × ``grid`` map of two joints.
+
+    Args:
+        spec: The robot (``chain:N``, a URDF path, an example-robot-data name).
+        joints: The two joints to sweep, by name (x then y).
+        grid: Points per side, 2 to `MAX_GRID`.
+        ranges: (lower, upper) per joint (default: its limits; ±π rad or ±1 m when none).
+        q: The configuration of the other joints (default: neutral), length nq.
+        metrics: Scalar metrics (`scalar_metrics`).
+        backend: ``auto``, ``crba`` or ``denoc`` (as ``analyze``).
+        workers: Local processes (1: this process).
+        scheduler: A Dask scheduler address or ``"local"`` (then ``workers`` is ignored).
+        progress: Called with the fraction of chunks done.
+    """
+    if (
+        isinstance(grid, bool)
+        or not isinstance(grid, (int, np.integer))
+        or not 2 <= grid <= MAX_GRID
+    ):
+        raise InputError("--grid", f"an integer from 2 to {MAX_GRID}", grid)
+    path = choose_path(spec, backend=backend)
+    metrics = check_metrics(list(metrics), path)
+    name, axes, units, limits, base_q = map_axes(spec, path, joints)
+    if ranges is not None:
+        limits = [tuple(map(float, r)) for r in ranges]
+        for joint, (lo, hi) in zip(joints, limits, strict=True):
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise InputError("--range", "finite lower < upper", (joint, lo, hi))
+    if q is not None:
+        q = np.asarray(q, dtype=float).ravel()
+        if q.shape != base_q.shape or not np.all(np.isfinite(q)):
+            raise InputError("--q", f"{base_q.size} finite numbers", q.size)
+        base_q = q
+    x = np.linspace(*limits[0], grid)
+    y = np.linspace(*limits[1], grid)
+    rows = max(1, CHUNK_POINTS // grid)
+    starts = range(0, grid, rows)
+    per_point = 2e-4 if path == "denoc" else 2e-5
+    tasks = [
+        Task(
+            _grid_chunk,
+            (spec, path, axes, base_q, x, y[s : s + rows], metrics),
+            rows * grid * per_point,
+        )
+        for s in starts
+    ]
+    values, interrupted = run_chunks(
+        tasks,
+        starts,
+        (grid, grid),
+        metrics,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+    )
+    return ConditioningMap(
+        robot=name,
+        joints=(joints[0], joints[1]),
+        units=(units[0], units[1]),
+        x=x,
+        y=y,
+        base_q=np.asarray(base_q, dtype=float),
+        path=path,
+        values=values,
+        interrupted=interrupted,
+    )

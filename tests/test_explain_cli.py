@@ -1,0 +1,59 @@
+"""`gimwatch explain`, `map`, `armature` and `analyze --explain` through main([...])."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from gimwatch.cli import main
+from gimwatch.explain.armature import minimal_armature
+from gimwatch.explain.sensitivity import kappa_sensitivities
+from gimwatch.model.robots import load_robot, random_configurations
+
+
+def test_explain_prints_modes_and_ranked_sensitivities(capsys):
+    assert main(["explain", "ur5", "--q", "0.3", "-0.7", "1.1", "0.2", "-0.4", "0.9"]) == 0
+    out = capsys.readouterr().out
+    assert "lambda_min = " in out and "moves wrist_3_joint" in out
+    assert "wrist_3_link+ee_link+tool0  Iyy" in out  # the top elasticity at that q
+
+
+def test_explain_json_holds_every_parameter(capsys):
+    assert main(["explain", "chain:3", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    expected = kappa_sensitivities(load_robot("chain:3"), np.zeros(3))
+    assert record["sensitivities"]["kappa"] == expected.kappa
+    assert len(record["sensitivities"]["sensitivities"]) == 3 * 13 + 3
+    assert sum(record["modes"]["lowest"]["joints"].values()) == pytest.approx(1.0)
+
+
+def test_analyze_explain_adds_modes(capsys):
+    assert main(["analyze", "chain:3", "--random", "2", "--explain", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    assert all("modes" in c for c in record["configurations"])
+    assert main(["analyze", "chain:3", "--explain"]) == 0
+    assert "config 0: lambda_max = " in capsys.readouterr().out
+
+
+def test_armature_command_prints_the_plan(capsys):
+    assert main(["armature", "ur5", "--target", "60", "--samples", "5", "--json"]) == 0
+    record = json.loads(capsys.readouterr().out)
+    robot = load_robot("ur5")
+    plan = minimal_armature(robot, random_configurations(robot, 5, seed=0), 60)
+    assert record["total"] == pytest.approx(plan.total, rel=1e-12)
+    assert max(record["kappa_after"]) <= 60
+
+
+def test_map_command_writes_the_folder(tmp_path, capsys):
+    out = tmp_path / "m"
+    argv = ["map", "chain:3", "--joints", "joint_2", "joint_3", "--grid", "4", "-o", str(out)]
+    assert main(argv) == 0
+    assert "kappa: " in capsys.readouterr().out
+    assert {p.name for p in out.iterdir()} >= {"map.csv", "map.json", "map_kappa.png"}
+    csv = tmp_path / "q.csv"
+    csv.write_text("0,0,0\n0.1,0.2,0.3\n")
+    argv = ["map", "chain:3", "--trajectory", str(csv), "-o", str(tmp_path / "t")]
+    assert main(argv) == 0
+    assert (tmp_path / "t" / "trajectory.png").exists()
