@@ -56,7 +56,6 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
         gim_operator,
         kappa_matrix_free,
     )
-    from gimwatch.metrics.watch import Watch
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
@@ -78,6 +77,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.survey.records import RobotFailure, RobotSurvey, SurveyResult
     from gimwatch.survey.report import write_survey
     from gimwatch.survey.run import run_survey
+    from gimwatch.watch.watch import Watch
 
 #: Public name -> the module that defines it (imported on first access).
 _EXPORTS: dict[str, str] = {
@@ -110,7 +110,7 @@ _EXPORTS: dict[str, str] = {
     "TreeReference": "gimwatch.stress.reference_tree",
     "URDFError": "gimwatch.errors",
     "URDFWarning": "gimwatch.errors",
-    "Watch": "gimwatch.metrics.watch",
+    "Watch": "gimwatch.watch.watch",
     "analyze_configuration": "gimwatch.metrics.dense_analysis",
     "bundled_scenes": "gimwatch.simulation.bundled_scenes",
     "chain_spec": "gimwatch.model.chains",

@@ -392,7 +392,7 @@ MUTANTS = (
     # --- watch sampling ---
     Mutant(
         "watch-alarm-every-sample",
-        "gimwatch/metrics/watch.py",
+        "gimwatch/watch/watch.py",
         "if above and not self._alarm_on:",
         "if above:",
         ("tests/test_watch.py",),
@@ -400,7 +400,7 @@ MUTANTS = (
     ),
     Mutant(
         "watch-alarm-never-rearms",
-        "gimwatch/metrics/watch.py",
+        "gimwatch/watch/watch.py",
         "self._alarm_on = above",
         "self._alarm_on = self._alarm_on or above",
         ("tests/test_watch.py",),

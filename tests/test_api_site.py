@@ -67,8 +67,8 @@ def test_no_raw_role_or_unresolved_reference_is_shown(api_pages):
 
 
 def test_cross_references_are_links(api_pages):
-    page = api_pages["api/metrics/index.html"]
-    assert 'href="#gimwatch.metrics.watch.Watch.sample"' in page  # Watch's docstring links it
+    page = api_pages["api/watch/index.html"]
+    assert 'href="#gimwatch.watch.watch.Watch.sample"' in page  # Watch's docstring links it
     assert 'href="../model/#gimwatch.model.robots.Robot"' in page
 
 

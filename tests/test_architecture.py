@@ -28,6 +28,7 @@ LAYERS = {
     "denoc": 3,
     "crosscheck": 4,
     "metrics": 4,
+    "watch": 4,
     "simulation": 5,
     "stress": 6,
     "survey": 6,

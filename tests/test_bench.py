@@ -67,8 +67,8 @@ def _rows(out, name):
 
 def test_quick_simulation_sections_measure_what_they_claim(quick_run):
     _, out = quick_run
-    from gimwatch.metrics.watch import METRICS
     from gimwatch.simulation.backends import BACKENDS
+    from gimwatch.watch.watch import METRICS
 
     assert {r["backend"] for r in _rows(out, "dynamics")} == set(BACKENDS)
     watches = {r["watch"]: r for r in _rows(out, "watch")}

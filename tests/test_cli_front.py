@@ -113,7 +113,7 @@ def test_robots_lists_every_example_robot(capsys):
 
 
 def test_metrics_lists_the_watch_metrics(capsys):
-    from gimwatch.metrics.watch import METRICS
+    from gimwatch.watch.watch import METRICS
 
     code, out, _ = run(capsys, "metrics", "--json")
     rows = json.loads(out)["metrics"]

@@ -73,7 +73,7 @@ def test_watch_delta_comes_from_the_lean_kernel_and_matches_the_closed_form():
     """δ watched alone: one compiled DeNOC call per sample, equal to the rod-chain formula."""
     from conftest import planar_rod_chain_gim
 
-    from gimwatch.metrics.watch import Watch
+    from gimwatch.watch.watch import Watch
 
     robot = load_robot("chain:7")
     watch = Watch(robot, ("diagonal_ratio",))

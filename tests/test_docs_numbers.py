@@ -1214,18 +1214,35 @@ def test_bench_block_work_precision_table_is_the_committed_csv():
     assert walls["mujoco RK4"] == _g3(acceptance["mujoco_rk4_interpolated_s"])
 
 
-def test_watch_page_quotes_the_committed_mujoco_loop_run():
-    with (BENCH / "watch_mujoco" / "watch_mujoco.csv").open(newline="") as handle:
-        rows = [r for r in csv.DictReader(handle) if r["source"] == "data"]
-    match = _find(
+def test_watch_page_quotes_the_committed_watch_overhead_run():
+    rows = _csv("watch_overhead/watch_overhead.csv")
+
+    def ratio(robot, loop, metric, column="watch_vs_bare"):
+        (row,) = [r for r in rows if (r["robot"], r["loop"], r["metric"]) == (robot, loop, metric)]
+        return f"{float(row[column]):.2f}"
+
+    _find(
         "docs/watch.md",
-        r"one sample costs\s+([\d.]+)–([\d.]+) `mj_step`s watching δ and (\d+)–(\d+) watching κ",
+        rf"a κ sample costs {ratio('xarm7', 'mujoco', 'kappa')}× `mj_fullM` \+ `eigvalsh` "
+        rf"and a δ sample {ratio('xarm7', 'mujoco', 'delta')}× reading",
     )
-    delta = [float(r["sample_vs_step"]) for r in rows if r["watch"] == "delta"]
-    kappa = [float(r["sample_vs_step"]) for r in rows if r["watch"] == "kappa"]
-    low, high, k_low, k_high = (float(x) for x in match.groups())
-    assert (low, high) == (round(min(delta), 2), round(max(delta), 1))
-    assert (k_low, k_high) == (int(min(kappa)), int(max(kappa)))
+    _find(
+        "docs/watch.md",
+        rf"{ratio('xarm7', 'pinocchio', 'kappa')}× `pin.crba` \+ `eigvalsh` and "
+        rf"{ratio('xarm7', 'pinocchio', 'delta')}× the O\(n\) diagonal",
+    )
+    _find("docs/watch.md", rf"{ratio('g1', 'mujoco', 'kappa', 'watch_vs_step')} `mj_step`s")
+    tracker = {
+        int(r["n"]): float(r["tracked_vs_dense"]) for r in _csv("watch_overhead/watch_tracker.csv")
+    }
+    pays = min(n for n, ratio in tracker.items() if ratio < 1.0)
+    below = max(n for n in tracker if n < pays)
+    _find(
+        "docs/watch.md",
+        rf"pays from about n = {pays}: .* costs {tracker[below]:.2f}× the dense κ sample at "
+        rf"n = {below}, {tracker[pays]:.2f}× at n = {pays} and {tracker[max(tracker)]:.2f}× at "
+        rf"n = {max(tracker)}",
+    )
 
 
 def test_explain_page_quotes_the_committed_map_timings():

@@ -133,7 +133,7 @@ def test_crosscheck_compares_denoc_pinocchio_and_mujoco(path):
 @pytest.mark.parametrize("stem", ["humanoid", "hopper"])
 def test_the_watch_on_mujoco_and_on_the_robot_agree(stem):
     """Watch.from_mujoco at MuJoCo's qpos == Watch(robot) at the mapped q (κ and δ)."""
-    from gimwatch.metrics.watch import Watch
+    from gimwatch.watch.watch import Watch
 
     path = FEATURES / f"{stem}.xml"
     robot = _load(path)

@@ -263,7 +263,7 @@ def test_watch_metric_kappa_tracked_equals_kappa(backend):
 
 
 def test_watch_metric_on_a_floating_base_uses_the_compiled_products():
-    from gimwatch.metrics.watch import Watch
+    from gimwatch.watch.watch import Watch
 
     robot = load_robot("solo12", floating=True)
     watch = Watch(robot, ("kappa", "kappa_tracked"))

@@ -8,8 +8,8 @@ from pathlib import Path
 import gimwatch as gw
 from gimwatch.cli.analyze import CSV_COLUMNS as ANALYZE_COLUMNS
 from gimwatch.cli.crosscheck import CSV_COLUMNS as CROSSCHECK_COLUMNS
-from gimwatch.metrics.watch import METRICS
 from gimwatch.survey.report import CSV_COLUMNS as SURVEY_COLUMNS
+from gimwatch.watch.watch import METRICS
 
 ROOT = Path(__file__).resolve().parents[1]
 

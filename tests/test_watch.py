@@ -5,10 +5,10 @@ import pytest
 import scipy.linalg
 from conftest import planar_rod_chain_gim
 
-from gimwatch.metrics.watch import METRICS, Watch, estimator_quality
 from gimwatch.model.robots import load_robot, random_configurations
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import run_scene
+from gimwatch.watch.watch import METRICS, Watch, estimator_quality
 
 ALL = (
     "kappa",
@@ -64,6 +64,14 @@ def test_metric_registry_is_the_scene_vocabulary():
 @pytest.fixture
 def counters(monkeypatch):
     counts = {"eig": 0, "crba": 0, "diag": 0}
+    from gimwatch.model import kernels
+
+    for kernel in (
+        kernels.scaled_spectrum,
+        kernels.spectrum_ratio,
+        kernels.spectrum_scale,
+    ):  # compiled before the
+        kernel(np.eye(2))  # patch below, which numba would otherwise see in its place
 
     def wrap(module, name, key):
         original = getattr(module, name)
@@ -81,6 +89,7 @@ def counters(monkeypatch):
         wrap(numpy.linalg, name, "eig")
     wrap(pin, "crba", "crba")
     wrap(pin, "computeCentroidalMap", "diag")
+    wrap(kernels, "scaled_spectrum", "eig")  # the watch's compiled eigen-solve
     from gimwatch.denoc.lean import LeanModel
 
     wrap(LeanModel, "gim_diagonal", "diag")  # the watch's compiled O(n) diagonal
@@ -165,3 +174,23 @@ def test_kappa_lanczos_on_a_sixty_link_straight_chain_is_accurate():
     watch.sample(0.0, q)
     lam = np.linalg.eigvalsh(planar_rod_chain_gim(q, 2.2, 1.0))
     assert watch.series["kappa_lanczos"][0] == pytest.approx(lam[-1] / lam[0], rel=1e-5)
+
+
+@pytest.mark.parametrize("nv", [3, 24, 25, 40])
+def test_matrix_watch_spectrum_matches_numpy_scaled_or_not(nv):
+    rng = numpy.random.default_rng(nv)
+    A = rng.standard_normal((nv, nv))
+    M = A @ A.T + 1e-3 * numpy.eye(nv)
+    reference = numpy.linalg.eigvalsh(M)
+    watch = Watch.from_matrices(nv, ("kappa", "eigenvalues", "diagonal_ratio", "diagonal"))
+    kappa_only = Watch.from_matrices(nv, ("kappa",))
+    for t, scale in enumerate((1.0, 2.0**-900, 2.0**900, 1e-300, 1e300)):
+        watch.sample_matrix(t, M * scale)
+        kappa_only.sample_matrix(t, M * scale)
+    kappa = reference[-1] / reference[0]
+    numpy.testing.assert_allclose(watch.array("kappa"), kappa, rtol=1e-9)
+    numpy.testing.assert_allclose(kappa_only.array("kappa"), kappa, rtol=1e-9)
+    numpy.testing.assert_allclose(watch.array("eigenvalues")[0], reference, rtol=1e-9)
+    d = numpy.diag(M)
+    numpy.testing.assert_allclose(watch.array("diagonal_ratio"), d.max() / d.min(), rtol=1e-14)
+    numpy.testing.assert_allclose(watch.array("diagonal")[0], d, rtol=0)

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from gimwatch.errors import GimwatchError
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.mujoco_model import compile_robot
 from gimwatch.model.robots import load_robot
+from gimwatch.watch.watch import Watch
 
 
 def mjcf_path(name: str) -> str:
@@ -143,6 +143,45 @@ CASES = {
 }
 
 
+FREE = compile_robot(load_robot("solo12", floating=True))
+FREE_DATA = mujoco.MjData(FREE)
+mujoco.mj_forward(FREE, FREE_DATA)
+ZERO_QUATERNION = FREE.qpos0.copy()
+ZERO_QUATERNION[3:7] = 0.0
+
+HOSTILE_CASES = {
+    "complex matrix": (
+        lambda: MATRICES.sample_matrix(0.0, [[2, 1j], [-1j, 2]]),
+        "M must be an array of real numbers, got 'complex128 entries'",
+    ),
+    "matrix of strings": (
+        lambda: MATRICES.sample_matrix(0.0, [["a", "b"], ["c", "d"]]),
+        "M must be an array of real numbers, got 'str32 entries'",
+    ),
+    "complex diagonal": (
+        lambda: DELTA.sample_diagonal(0.0, [1 + 1j, 2.0]),
+        "the diagonal must be an array of real numbers, got 'complex128 entries'",
+    ),
+    "qpos of strings": (
+        lambda: Watch.from_mujoco(MODEL, DATA).sample(0.0, ["a"] * MODEL.nq),
+        "q must be an array of real numbers, got 'str32 entries'",
+    ),
+    "complex qpos": (
+        lambda: Watch.from_mujoco(MODEL, DATA).sample(0.0, np.zeros(MODEL.nq) + 1j),
+        "q must be an array of real numbers, got 'complex128 entries'",
+    ),
+    "zero free-joint quaternion": (
+        lambda: Watch.from_mujoco(FREE, FREE_DATA).sample(0.0, ZERO_QUATERNION),
+        "the quaternion q[3:7] must be non-zero, got array([0., 0., 0., 0.])",
+    ),
+    "indefinite matrix to a delta watch": (
+        lambda: DELTA.sample_matrix(0.0, [[1.0, 2.0], [2.0, 1.0]]),
+        "the GIM must be positive definite (Matrix is not positive definite)",
+    ),
+}
+CASES.update(HOSTILE_CASES)  # issue 27: complex, text, zero quaternions, M not > 0
+
+
 @pytest.mark.parametrize("case", CASES)
 def test_bad_input_to_the_watch_is_one_line(case):
     call, message = CASES[case]
@@ -159,3 +198,47 @@ def test_a_failed_sample_records_nothing():
         watch.sample_matrix(1.0, [[1.0, 0.0], [0.0, -1.0]])
     assert watch.array("t").tolist() == [0.0]
     assert [len(v) for v in watch.series.values()] == [1, 1]
+
+
+def test_a_huge_finite_matrix_has_a_finite_kappa():
+    M = np.array([[2.0, 1.0], [1.0, 2.0]]) * 8e307
+    watch = Watch.from_matrices(2, ("kappa", "eigenvalues"))
+    watch.sample_matrix(0.0, M)
+    assert watch.array("kappa")[0] == pytest.approx(3.0, rel=1e-14)
+    from gimwatch.metrics.conditioning import condition_number
+
+    assert condition_number(M) == pytest.approx(3.0, rel=1e-14)
+
+
+def _negative_armature_model():
+    xml = """<mujoco><worldbody><body><joint type="hinge" axis="0 0 1" armature="-5"/>
+    <geom type="box" size="0.1 0.1 0.1" mass="1"/><body pos="0.5 0 0">
+    <joint type="hinge" axis="0 0 1" armature="-5"/><geom type="box" size="0.1 0.1 0.1"
+    mass="1"/></body></body></worldbody></mujoco>"""
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return model, data
+
+
+@pytest.mark.parametrize("metrics", [("diagonal_ratio",), ("kappa",)])
+def test_a_mujoco_m_that_is_not_positive_definite_is_refused(metrics):
+    model, data = _negative_armature_model()
+    assert np.any(data.M[model.dof_Madr] < 0)  # the case: MuJoCo's M is not > 0
+    watch = Watch.from_mujoco(model, data, metrics)
+    with pytest.raises(GimwatchError, match="positive"):
+        watch.sample(0.0)
+    assert watch.array("t").size == 0
+
+
+@pytest.mark.parametrize("nv", [2, 30])
+@pytest.mark.parametrize("metrics", [("kappa",), ("kappa", "eigenvalues")])
+def test_a_source_m_that_goes_bad_mid_run_is_refused_by_the_checked_path(nv, metrics):
+    """The compiled path reads only diag M for its scale: bad entries off it still fail."""
+    watch = Watch.from_matrices(nv, metrics)
+    watch.sample_matrix(0.0, np.eye(nv))
+    bad = np.eye(nv)
+    bad[0, 1] = bad[1, 0] = 1e300  # symmetric, finite, indefinite, far above the diagonal
+    with pytest.raises(GimwatchError, match="positive definite"):
+        watch.sample_matrix(1.0, bad)
+    assert watch.array("t").tolist() == [0.0]

@@ -10,11 +10,11 @@ import pinocchio as pin
 import pytest
 
 from gimwatch.errors import IllConditionedWarning, InputError
-from gimwatch.metrics.alarm import DEFAULT_ALARM_THRESHOLD
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.inertia import gim
 from gimwatch.model.mujoco_model import _joint_maps, compile_robot
 from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.watch.alarm import DEFAULT_ALARM_THRESHOLD
+from gimwatch.watch.watch import Watch
 
 
 def mjcf_path(name: str) -> str:

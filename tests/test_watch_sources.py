@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from gimwatch.errors import GimwatchError
-from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model
 from gimwatch.model.inertia import gim
 from gimwatch.model.mujoco_model import _joint_maps, compile_robot
 from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.watch.sources import GivenMatrix, MujocoSource, robot_from_model
 
 
 def mjcf_path(name: str) -> str:

@@ -72,6 +72,11 @@ SECTIONS: dict[str, Section] = {
             "Cost of the watch in a MuJoCo loop",
             "gimwatch.bench.watch_mujoco",
         ),
+        Section(
+            "watch_overhead",
+            "The watch sample against the bare computation",
+            "gimwatch.bench.watch_overhead",
+        ),
         Section("denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section"),
         Section("explain", "Conditioning maps", "gimwatch.bench.explain_maps"),
         Section("longchain", "Very long chains on the O(n) path", "gimwatch.bench.longchain_cost"),

@@ -5,7 +5,7 @@ in one run, median µs per call (`gimwatch.bench.timing.time_call`, BLAS on one 
 the CLI pins it with threadpoolctl):
 
 * ``delta_watch_us`` — one
-  [`sample`][gimwatch.metrics.watch.Watch.sample] watching δ only, what
+  [`sample`][gimwatch.watch.watch.Watch.sample] watching δ only, what
   a simulation pays per sample (the watch takes diag M from DeNOC's compiled
   [`LeanModel`][gimwatch.denoc.LeanModel]: one call, buffers preallocated);
 * ``delta_lean_us`` — δ alone from ``LeanModel.diagonal_ratio`` (one compiled call);
@@ -35,10 +35,10 @@ from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits, time_call
 from gimwatch.metrics.conditioning import diagonal_ratio
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.inertia import gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
 from gimwatch.simulation.backends import DenocBackend
+from gimwatch.watch.watch import Watch
 
 __all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "TARGETS", "run"]
 

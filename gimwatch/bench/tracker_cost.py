@@ -19,7 +19,7 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   DeNOC's operators ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]).
 * ``tracker_claim`` — along the paper's own trajectories (the bundled ``chain_{4,10,20}``
   scenes): δ, αδ (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch
-  metric: median cost of one [`sample`][gimwatch.metrics.watch.Watch.sample] and the median /
+  metric: median cost of one [`sample`][gimwatch.watch.watch.Watch.sample] and the median /
   max relative error against κ.
 * ``tracker_chain_1000`` — the bundled ``chain_1000`` scene (DOP853 on DeNOC) run watching δ alone
   and watching δ and the tracked κ at every sample: wall time of each run (median of runs).
@@ -43,12 +43,12 @@ from gimwatch.denoc import DenocModel, extreme_eigenvalues
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.metrics.tracker import KappaTracker
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import load_robot
 from gimwatch.simulation.bundled_scenes import SCENES_DIR
 from gimwatch.simulation.scene import load_scene, parse_scene
 from gimwatch.simulation.simulate import Simulation, run_scene
+from gimwatch.watch.watch import Watch
 
 __all__ = ["CLAIM_ESTIMATORS", "TARGETS", "run", "swinging_chain"]
 

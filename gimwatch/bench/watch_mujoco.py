@@ -3,7 +3,7 @@
 A robot compiled in MuJoCo with exact inertias (`gimwatch.model.mujoco_model.compile_robot`)
 swings under gravity from seeded random joint angles (±1 rad) with ``mj_step`` (MuJoCo's default
 Euler integrator, dt = `DT_S`); the watch is
-[`from_mujoco`][gimwatch.metrics.watch.Watch.from_mujoco] sampled after
+[`from_mujoco`][gimwatch.watch.watch.Watch.from_mujoco] sampled after
 every step. Watches (`WATCHES`): δ only (the diagonal entries of MuJoCo's sparse M, no M formed) and
 κ (``mj_fullM`` + a symmetric eigen-solve), each either reading the M that ``mj_step`` left in
 ``data`` (``source = data``) or recomputing M at ``data.qpos`` on a private ``MjData``
@@ -29,9 +29,9 @@ from threadpoolctl import threadpool_limits
 
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.mujoco_model import compile_robot, compile_urdf
 from gimwatch.model.robots import load_robot
+from gimwatch.watch.watch import Watch
 
 __all__ = ["COLUMNS", "ROBOTS", "WATCHES", "run"]
 

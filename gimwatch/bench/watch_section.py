@@ -10,7 +10,7 @@ Per (n, watch) the section reports
 
 * ``step_us`` — a whole run timed (median of ``repeats`` runs) divided by its steps, and
   ``run_overhead`` — its excess over the bare run (the difference of two run times: noisy);
-* ``sample_us`` — one [`sample`][gimwatch.metrics.watch.Watch.sample]
+* ``sample_us`` — one [`sample`][gimwatch.watch.watch.Watch.sample]
   timed alone on the bare run's configurations, in order (so Lanczos warm-starts as in a run),
   median of passes;
 * ``sample_vs_step`` = sample_us / bare step_us — the watch's cost if it sampled every step;
@@ -31,10 +31,10 @@ from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import plot_watch_cost
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.robots import load_robot
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import Simulation
+from gimwatch.watch.watch import Watch
 
 __all__ = ["COLUMNS", "STEPS_PER_SAMPLE", "WATCHES", "run"]
 

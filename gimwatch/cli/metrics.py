@@ -25,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def metric_rows() -> list[dict]:
     """One row per metric of the watch's registry."""
-    from gimwatch.metrics.watch import METRICS
+    from gimwatch.watch.watch import METRICS
 
     rows = []
     for name, metric in METRICS.items():

@@ -92,7 +92,19 @@ def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
     recomputed with SciPy's ``syevr`` (the driver gimwatch used before) before M is declared
     not positive definite, so such numerically singular GIMs keep their former verdict.
     """
+    values, scale = _scaled_eigenvalues(matrix)
+    return values * scale
+
+
+def _scaled_eigenvalues(matrix: npt.ArrayLike) -> tuple[np.ndarray, float]:
+    """Eigenvalues of M / s (ascending) and s = 2^k <= max |M_ij| < 2^(k+1).
+
+    Solving the scaled matrix keeps a finite M finite (``[[2, 1], [1, 2]] · 8e307``: κ = 3,
+    where the unscaled solve overflows); a power of two scales without rounding.
+    """
     M = check_gim(matrix)
+    scale = float(np.ldexp(1.0, int(np.frexp(np.max(np.abs(M)))[1]) - 1))
+    M = M / scale
     values = np.linalg.eigvalsh(M)
     if values[0] <= 0:
         import scipy.linalg
@@ -100,9 +112,9 @@ def eigenvalues(matrix: npt.ArrayLike) -> np.ndarray:
         values = scipy.linalg.eigvalsh(M, check_finite=False)
     if values[0] <= 0:
         raise ConditioningError(
-            f"the GIM must be positive definite, got smallest eigenvalue {values[0]:.6g}"
+            f"the GIM must be positive definite, got smallest eigenvalue {values[0] * scale:.6g}"
         )
-    return values
+    return values, scale
 
 
 def eigenpairs(matrix: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
@@ -136,7 +148,7 @@ def condition_number(matrix: npt.ArrayLike) -> float:
     Round-off limits it: λmin is known only to about eps·λmax, so values near 1/eps
     (~4.5e15) carry no digits.
     """
-    return extreme_ratio(eigenvalues(matrix))
+    return extreme_ratio(_scaled_eigenvalues(matrix)[0])
 
 
 def _real_array(value: npt.ArrayLike, what: str) -> np.ndarray:

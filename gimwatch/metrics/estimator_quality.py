@@ -1,7 +1,7 @@
 """How well the diagonal ratio δ tracks κ along a series: the one set of statistics.
 
 The watch's summaries, the survey's random samples and the survey's trajectories all use
-[`estimator_quality`][gimwatch.metrics.watch.estimator_quality], under one rule for the first sample
+[`estimator_quality`][gimwatch.watch.watch.estimator_quality], under one rule for the first sample
 (t0):
 
 * α = κ(t0)/δ(t0) is fixed at t0 (Shah & Saha 2013, Eq. 15), so αδ equals κ there by

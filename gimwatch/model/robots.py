@@ -68,6 +68,7 @@ __all__ = [
     "parse_chain_spec",
     "placeholder_limit_joints",
     "random_configurations",
+    "unit_blocks",
 ]
 
 _CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
@@ -266,14 +267,10 @@ def _mjcf_robot(
     from gimwatch.model.mjcf_robot import read_mjcf
 
     model, joint_ids, urdf_xml = read_mjcf(source, floating=floating, body=body, armature=armature)
-    if model.nv == 0:
-        raise RobotError(
-            spec, "has no degree of freedom with a fixed base; load it with a floating base"
-        )
-    return Robot(
+    return _robot(
+        model,
         name=f"{name}[{body}]" if body else name,  # reports say which subtree was read
         spec=spec,
-        model=model,
         urdf_xml=urdf_xml,
         source=source,
         floating=floating,
@@ -282,6 +279,19 @@ def _mjcf_robot(
         mjcf_armature=armature,
         mujoco_joints=joint_ids,
     )
+
+
+def _robot(model: pin.Model, *, spec: str, **fields) -> Robot:
+    """The one place a `Robot` is made, from a URDF's or an MJCF's Pinocchio model.
+
+    Raises:
+        RobotError: The model has no degree of freedom (a fixed single body).
+    """
+    if model.nv == 0:
+        raise RobotError(
+            spec, "has no degree of freedom with a fixed base; load it with a floating base"
+        )
+    return Robot(model=model, spec=spec, **fields)
 
 
 def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
@@ -365,18 +375,8 @@ def load_robot(
     if body:
         raise InputError("--body", "given only with an MJCF file", body)
     model, xml = _build_model(xml, source, floating)
-    if model.nv == 0:
-        raise RobotError(
-            text, "has no degree of freedom with a fixed base; load it with a floating base"
-        )
-    return Robot(
-        name=name,
-        spec=text,
-        model=model,
-        urdf_xml=xml,
-        source=source,
-        floating=floating,
-        chain=chain,
+    return _robot(
+        model, name=name, spec=text, urdf_xml=xml, source=source, floating=floating, chain=chain
     )
 
 
@@ -391,7 +391,15 @@ def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
     model, xml = _build_model(xml, source, floating)
-    return Robot(spec.name, f"chain:{spec.n}", model, xml, source, floating, spec)
+    return _robot(
+        model,
+        name=spec.name,
+        spec=f"chain:{spec.n}",
+        urdf_xml=xml,
+        source=source,
+        floating=floating,
+        chain=spec,
+    )
 
 
 def neutral_configuration(robot: Robot) -> np.ndarray:
@@ -401,6 +409,38 @@ def neutral_configuration(robot: Robot) -> np.ndarray:
 
 #: |‖block‖ − 1| allowed for the unit blocks of a q given to the library functions.
 UNIT_NORM_TOLERANCE = 1e-6
+
+
+def unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Where q's unit blocks end, their sizes and joints: computed once per robot, kept on it."""
+    blocks = robot.__dict__.get("_unit_blocks")
+    if blocks is None:
+        found = [
+            (joint.idx_q + joint.nq, unit_block_size(joint), name)
+            for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True)
+            if unit_block_size(joint)
+        ]
+        blocks = (
+            np.array([b[0] for b in found], dtype=np.int64),
+            np.array([b[1] for b in found], dtype=np.int64),
+            tuple(b[2] for b in found),
+        )
+        object.__setattr__(robot, "_unit_blocks", blocks)  # frozen: a cache, not state
+    return blocks
+
+
+def _unit_norms(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """The norm of every unit block of q, by one gather and one segmented sum (no joint loop)."""
+    gather = robot.__dict__.get("_unit_gather")
+    if gather is None:
+        stops, sizes, _ = unit_blocks(robot)
+        index = np.concatenate(
+            [np.arange(stop - size, stop) for stop, size in zip(stops, sizes, strict=True)]
+        )
+        gather = (index, np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp))
+        object.__setattr__(robot, "_unit_gather", gather)  # frozen: a cache, not state
+    index, offsets = gather
+    return np.sqrt(np.add.reduceat(q[index] ** 2, offsets))
 
 
 def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
@@ -421,16 +461,16 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
     if not np.all(np.isfinite(array)):
         raise InputError("q", "finite", array.tolist())
-    for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
-        unit = unit_block_size(joint)
-        if unit:
-            stop = joint.idx_q + joint.nq
-            norm = float(np.linalg.norm(array[stop - unit : stop]))
-            if not abs(norm - 1.0) <= UNIT_NORM_TOLERANCE:
-                what = "quaternion" if unit == 4 else "(cos θ, sin θ)"
-                raise InputError(
-                    f"the {what} of joint {name!r} in q",
-                    f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
-                    round(norm, 9),
-                )
+    stops, sizes, names = unit_blocks(robot)
+    if stops.size:
+        norms = _unit_norms(robot, array)
+        bad = np.flatnonzero(~(np.abs(norms - 1.0) <= UNIT_NORM_TOLERANCE))
+        if bad.size:
+            k = int(bad[0])
+            what = "quaternion" if sizes[k] == 4 else "(cos θ, sin θ)"
+            raise InputError(
+                f"the {what} of joint {names[k]!r} in q",
+                f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
+                round(float(norms[k]), 9),
+            )
     return array

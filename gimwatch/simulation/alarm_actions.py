@@ -20,9 +20,9 @@ from __future__ import annotations
 
 from typing import Any, ClassVar, Protocol
 
-from gimwatch.metrics.watch import Alarm
 from gimwatch.simulation.backends import make_backend
 from gimwatch.simulation.integrators import INTEGRATORS
+from gimwatch.watch.watch import Alarm
 
 __all__ = [
     "ALARM_ACTIONS",

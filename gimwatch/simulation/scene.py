@@ -23,7 +23,6 @@ from pathlib import Path
 from typing import Any
 
 from gimwatch.errors import SceneError
-from gimwatch.metrics.watch import METRICS
 from gimwatch.model.robots import path_problem
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS as BACKEND_CLASSES
@@ -41,6 +40,7 @@ from gimwatch.simulation.scene_integrator import (
 from gimwatch.simulation.scene_reader import JointValues, TableReader
 from gimwatch.simulation.torque_laws import TORQUE_LAWS
 from gimwatch.suggest import did_you_mean
+from gimwatch.watch.watch import METRICS
 
 __all__ = [
     "BACKENDS",

@@ -11,13 +11,13 @@ from __future__ import annotations
 import inspect
 import re
 
-from gimwatch.metrics.watch import METRICS
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS
 from gimwatch.simulation.effects import EFFECTS
 from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.simulation.parameters import Parameter
 from gimwatch.simulation.torque_laws import TORQUE_LAWS
+from gimwatch.watch.watch import METRICS
 
 __all__ = ["scene_reference"]
 

@@ -30,7 +30,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from gimwatch.metrics.watch import Watch
 from gimwatch.model.robots import Robot
 from gimwatch.simulation.alarm_actions import (
     ALARM_ACTIONS,
@@ -44,6 +43,7 @@ from gimwatch.simulation.local_coordinates import LocalChart
 from gimwatch.simulation.scene import Scene
 from gimwatch.simulation.scene_robot import initial_state, load_scene_robot
 from gimwatch.simulation.trajectory import STATUSES, Trajectory
+from gimwatch.watch.watch import Watch
 
 __all__ = [
     "MIN_STEP_FRACTION",

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gimwatch.errors import SimulationError
-from gimwatch.metrics.watch import Alarm
+from gimwatch.watch.watch import Alarm
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -22,17 +22,25 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics.alarm import (
+from gimwatch.metrics.conditioning import ldlt_pivots
+from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
+from gimwatch.metrics.registry import METRICS, GimState
+from gimwatch.model.robots import (
+    DATA_NV_LIMIT,
+    UNIT_NORM_TOLERANCE,
+    Robot,
+    as_configuration,
+    unit_blocks,
+)
+from gimwatch.watch.alarm import (
     DEFAULT_ALARM_THRESHOLD,
     Alarm,
     alarm_threshold,
     check_on_alarm,
     warn_alarm,
 )
-from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
-from gimwatch.metrics.registry import METRICS, GimState
-from gimwatch.metrics.watch_sources import GivenMatrix, MujocoSource, robot_from_model, type_name
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.watch.series import WatchSeries
+from gimwatch.watch.sources import GivenMatrix, MujocoSource, robot_from_model, type_name
 
 __all__ = [
     "DEFAULT_ALARM_THRESHOLD",
@@ -49,6 +57,8 @@ __all__ = [
 DEFAULT_METRICS = ("kappa", "diagonal_ratio")
 #: Metrics that run the robot's RNEA/ABA at q: they need a robot and a configuration, not M.
 OPERATOR_METRICS = frozenset({"kappa_lanczos", "kappa_tracked"})
+#: Metrics of the compiled sample path: one scaled eigen-solve, or the diagonal alone.
+FAST_METRICS = frozenset({"kappa", "eigenvalues", "diagonal_ratio", "diagonal"})
 
 
 def _metric_names(metrics) -> tuple[str, ...]:
@@ -63,14 +73,14 @@ class Watch:
     """Evaluates the requested metrics at samples and raises alarms, in any loop.
 
     Build it from what the loop has: ``Watch(robot, metrics)`` (a gimwatch
-    [`Robot`][gimwatch.model.robots.Robot]), [`from_model`][gimwatch.metrics.watch.Watch.from_model]
-    (a ``pinocchio.Model``), [`from_mujoco`][gimwatch.metrics.watch.Watch.from_mujoco] (a MuJoCo
-    ``MjModel``/``MjData`` pair) or [`from_matrices`][gimwatch.metrics.watch.Watch.from_matrices] (M
-    or diag M fed by hand). Sample with [`sample`][gimwatch.metrics.watch.Watch.sample] (a
-    configuration ``q``), [`sample_matrix`][gimwatch.metrics.watch.Watch.sample_matrix] (M) or
-    [`sample_diagonal`][gimwatch.metrics.watch.Watch.sample_diagonal] (diag M); read the series with
-    [`array`][gimwatch.metrics.watch.Watch.array], [`arrays`][gimwatch.metrics.watch.Watch.arrays]
-    or [`to_dataframe`][gimwatch.metrics.watch.Watch.to_dataframe].
+    [`Robot`][gimwatch.model.robots.Robot]), [`from_model`][gimwatch.watch.watch.Watch.from_model]
+    (a ``pinocchio.Model``), [`from_mujoco`][gimwatch.watch.watch.Watch.from_mujoco] (a MuJoCo
+    ``MjModel``/``MjData`` pair) or [`from_matrices`][gimwatch.watch.watch.Watch.from_matrices] (M
+    or diag M fed by hand). Sample with [`sample`][gimwatch.watch.watch.Watch.sample] (a
+    configuration ``q``), [`sample_matrix`][gimwatch.watch.watch.Watch.sample_matrix] (M) or
+    [`sample_diagonal`][gimwatch.watch.watch.Watch.sample_diagonal] (diag M); read the series with
+    [`array`][gimwatch.watch.watch.Watch.array], [`arrays`][gimwatch.watch.watch.Watch.arrays]
+    or [`to_dataframe`][gimwatch.watch.watch.Watch.to_dataframe].
 
     Args:
         robot: The robot; None when ``dynamics`` is a source that gives ``nv`` (MuJoCo, matrices).
@@ -78,13 +88,13 @@ class Watch:
         alarm_metric: One of ``metrics`` (or None for no alarm).
         alarm_threshold: Threshold on the metric's condition-number scale; default
             `DEFAULT_ALARM_THRESHOLD` (κ·eps = 1e-2).
-        on_alarm: Called with the [`Alarm`][gimwatch.metrics.alarm.Alarm] at each upward crossing.
+        on_alarm: Called with the [`Alarm`][gimwatch.watch.alarm.Alarm] at each upward crossing.
         warn: Issue [`IllConditionedWarning`][gimwatch.errors.IllConditionedWarning] at each upward
             crossing; None: when no ``on_alarm`` is given.
         dynamics: Where M(q) and diag M(q) come from: an object with ``gim(q)`` and
             ``gim_diagonal(q)`` (a simulation passes its backend, so that a long chain on
             ``denoc`` never builds a Pinocchio Data; see
-            [`gimwatch.metrics.watch_sources`][gimwatch.metrics.watch_sources]);
+            [`gimwatch.watch.sources`][gimwatch.watch.sources]);
             None: Pinocchio, with a Data of its own.
 
     Raises:
@@ -141,10 +151,22 @@ class Watch:
         self._set_alarm(alarm_metric, alarm_threshold, on_alarm, warn)
         self._check_q = robot is not None and dynamics is None
         self._given = None
-        self.times: list[float] = []
-        self.series: dict[str, list] = {name: [] for name in self.metrics}
+        widths = {name: self.nv if m.vector else 0 for name, m in self.metrics.items()}
+        self._series = WatchSeries(widths)
         self.alarms: list[Alarm] = []
         self._alarm_on = False
+        # the compiled path, once the first sample passed every check (see _fast_values)
+        self._fast = bool(self.metrics) and FAST_METRICS.issuperset(self.metrics)
+        self._names = tuple(self.metrics)
+        from gimwatch.model import kernels  # numba, imported when a watch is built, not before
+
+        self._kernels = kernels
+        self._only_kappa = self._names == ("kappa",)
+        self._blocks = (*unit_blocks(robot), robot.nq) if self._check_q else None
+        self._matrix_watch = isinstance(dynamics, GivenMatrix)
+        self._reads_state = bool(getattr(dynamics, "reads_state", False))
+        self._checked = False
+        self._M = np.empty((self.nv, self.nv)) if self.full else None
 
     def _set_alarm(self, metric, threshold, on_alarm, warn) -> None:
         if metric is not None and (metric not in self.metrics or self.metrics[metric].vector):
@@ -162,8 +184,8 @@ class Watch:
     ) -> Watch:
         """A watch on a ``pinocchio.Model`` (M from Pinocchio's CRBA; δ without forming M).
 
-        Sample with [`sample`][gimwatch.metrics.watch.Watch.sample] (``q`` of length ``model.nq``).
-        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch]
+        Sample with [`sample`][gimwatch.watch.watch.Watch.sample] (``q`` of length ``model.nq``).
+        ``options``: the alarm arguments of [`Watch`][gimwatch.watch.watch.Watch]
         (``alarm_metric``, ``alarm_threshold``, ``on_alarm``, ``warn``).
         """
         return cls(robot_from_model(model), metrics, **options)
@@ -185,8 +207,8 @@ class Watch:
         the step started); ``sample(t, qpos)`` computes M at ``qpos`` without touching
         ``data``. ``robot`` (a gimwatch Robot or ``pinocchio.Model``) maps MuJoCo's joints by
         name into its coordinates; ``armature=False`` removes MuJoCo's ``dof_armature`` from
-        the diagonal (see [`MujocoSource`][gimwatch.metrics.watch_sources.MujocoSource]).
-        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch].
+        the diagonal (see [`MujocoSource`][gimwatch.watch.sources.MujocoSource]).
+        ``options``: the alarm arguments of [`Watch`][gimwatch.watch.watch.Watch].
         """
         source = MujocoSource(model, data, robot=robot, armature=armature)
         return cls(None, metrics, dynamics=source, **options)
@@ -202,7 +224,7 @@ class Watch:
     ) -> Watch:
         """A watch fed by hand: `sample_matrix` (M) or `sample_diagonal` (diag M).
 
-        ``options``: the alarm arguments of [`Watch`][gimwatch.metrics.watch.Watch].
+        ``options``: the alarm arguments of [`Watch`][gimwatch.watch.watch.Watch].
         """
         return cls(None, metrics, dynamics=GivenMatrix(nv, dof_names), **options)
 
@@ -211,30 +233,41 @@ class Watch:
         """Record the watched metrics of M(q) at time ``t`` (s); return a new alarm, if any.
 
         ``q`` is the configuration (length nq; MuJoCo's ``qpos`` for
-        [`from_mujoco`][gimwatch.metrics.watch.Watch.from_mujoco], where it may be omitted to read
+        [`from_mujoco`][gimwatch.watch.watch.Watch.from_mujoco], where it may be omitted to read
         the M held in ``data``).
         """
         if not self.metrics:
             return None
-        if isinstance(self.dynamics, GivenMatrix):
+        if self._matrix_watch:
             raise InputError(
                 "sample(t, q)",
                 "used on a watch of a robot or a MuJoCo pair",
                 "a matrix watch",
                 hint="use sample_matrix(t, M) or sample_diagonal(t, d)",
             )
-        if q is None and not getattr(self.dynamics, "reads_state", False):
+        if q is None and not self._reads_state:
             raise InputError("q", "given (a configuration of the robot)", None)
+        t = _time(t)
         if self._check_q:
-            q = as_configuration(self.robot, q)
-        state = GimState(self.robot, self.data, q, self.full, self.dynamics, self.lean)
-        return self._record(t, state)
+            q = self._configuration(q)
+        values = self._fast_values(self.dynamics, q) if self._checked else None
+        if values is None:
+            state = GimState(self.robot, self.data, q, self.full, self.dynamics, self.lean)
+            values = self._checked_values(state, self.dynamics, q)
+        return self._record(t, values)
 
     def sample_matrix(self, t: float, M: npt.ArrayLike) -> Alarm | None:
         """Record the watched metrics of the given M (nv x nv, symmetric positive definite)."""
+        t = _time(t)
         given = self._hold()
         given.hold_matrix(M)
-        return self._record(t, GimState(self.robot, None, None, self.full, given, None))
+        if not self.full:  # no eigen-solve to fold the check into: M > 0 by Cholesky
+            ldlt_pivots(given.gim())
+        values = self._fast_values(given, None)
+        if values is None:
+            state = GimState(self.robot, None, None, self.full, given, None)
+            values = [metric(state) for metric in self.metrics.values()]
+        return self._record(t, values)
 
     def sample_diagonal(self, t: float, diagonal: npt.ArrayLike) -> Alarm | None:
         """Record the watched metrics of the given diag M (only metrics that need no more)."""
@@ -243,9 +276,14 @@ class Watch:
                 raise InputError(
                     "sample_diagonal", "used when no watched metric needs the full M", name
                 )
+        t = _time(t)
         given = self._hold()
         given.hold_diagonal(diagonal)
-        return self._record(t, GimState(self.robot, None, None, False, given, given))
+        values = self._fast_values(given, None)
+        if values is None:
+            state = GimState(self.robot, None, None, False, given, given)
+            values = [metric(state) for metric in self.metrics.values()]
+        return self._record(t, values)
 
     def _hold(self) -> GivenMatrix:
         for name in OPERATOR_METRICS.intersection(self.metrics):
@@ -257,20 +295,114 @@ class Watch:
             self._given = self._given or GivenMatrix(self.nv, self.dof_names)
         return self._given
 
-    def _record(self, t: float, state) -> Alarm | None:
+    def _configuration(self, q) -> np.ndarray:
+        """Q checked by one compiled pass when already a float vector of nq, else copied.
+
+        The compiled path only reads q, so a good float vector is not copied; anything else
+        goes through `as_configuration` (a checked copy, or the error naming the fault).
+        """
+        stops, sizes, _, nq = self._blocks
+        if (
+            self._fast
+            and type(q) is np.ndarray
+            and q.dtype == np.float64
+            and q.shape == (nq,)
+            and self._kernels.unit_block_fault(q, stops, sizes, UNIT_NORM_TOLERANCE) == -1
+        ):
+            return q
+        return as_configuration(self.robot, q)
+
+    def _checked_values(self, state: GimState, source, q) -> list:
+        """Every metric through the checked state; the first sample also checks M > 0.
+
+        A source's own M cannot change kind between samples (the same model, the same
+        code), so its checks run once per watch; a source that says its M may not be
+        positive definite (``trusted = False``: MuJoCo's negative ``dof_armature``) is
+        checked at every sample.
+        """
+        values = [metric(state) for metric in self.metrics.values()]
+        if not self.full and not getattr(source, "trusted", True):
+            ldlt_pivots(source.gim(q))  # raises ConditioningError: M is not > 0
+        elif not self.full and source is None and self.lean is None and not self._checked:
+            if self.nv <= DATA_NV_LIMIT:
+                ldlt_pivots(state.M)
+        self._checked = getattr(source, "trusted", True)
+        return values
+
+    def _fast_values(self, source, q) -> list | None:
+        """The watched values by the compiled path, or None: then the checked path decides.
+
+        κ: one scaled eigen-solve (`scaled_spectrum`); a NaN or
+        non-positive λmin sends the sample to the checked path, which names the problem, so
+        the checks cost nothing on a good M. δ: one compiled call on the diagonal.
+        """
+        if not self._fast:
+            return None
         try:
-            t = float(t)
-        except (TypeError, ValueError):
-            raise InputError("t", "a time in seconds", t) from None
-        if not math.isfinite(t):
-            raise InputError("t", "a finite time in seconds", t)
-        values = [metric(state) for metric in self.metrics.values()]  # all, then record
-        self.times.append(t)
-        for series, value in zip(self.series.values(), values, strict=True):
-            series.append(value)
+            return self._compiled_values(source, q)
+        except np.linalg.LinAlgError:  # NaN in M reached LAPACK: the checked path says where
+            return None
+
+    def _compiled_values(self, source, q) -> list | None:
+        if self._only_kappa and self.nv > NUMPY_EIG_MIN_NV:  # NumPy's LAPACK is faster there
+            M = self._gim(source, q)
+            scale = self._kernels.spectrum_scale(M)
+            if not scale > 0.0:
+                return None
+            values = np.linalg.eigvalsh(M if scale == 1.0 else M * (1.0 / scale))
+            value = values[-1] / values[0]
+            return [value] if value >= 1.0 else None
+        if self._only_kappa:
+            value = self._kernels.spectrum_ratio(self._gim(source, q))
+            return [value] if value >= 1.0 else None  # NaN: the checked path names why
+        if self.full:
+            M = self._gim(source, q)
+            spectrum, scale = self._kernels.scaled_spectrum(M)
+            low = spectrum[0]
+            if not low > 0.0:
+                return None
+            out = []
+            for name in self._names:
+                if name == "kappa":
+                    out.append(spectrum[-1] / low)
+                elif name == "eigenvalues":
+                    out.append(spectrum * scale)
+                elif name == "diagonal":
+                    out.append(M.diagonal())
+                else:
+                    out.append(self._kernels.positive_ratio(M.diagonal()))
+            return out
+        lean = self.lean if source is self.dynamics else source
+        if self._names == ("diagonal_ratio",) and lean is not None:
+            value = lean.diagonal_ratio(q)
+            return [value] if 1.0 <= value < math.inf else None
+        diag = self._diagonal(lean, source, q)
+        delta = self._kernels.positive_ratio(diag)
+        if not delta >= 1.0:
+            return None
+        return [delta if name == "diagonal_ratio" else diag for name in self._names]
+
+    def _gim(self, source, q) -> np.ndarray:
+        if source is None:
+            return pin.crba(self.robot.model, self.data, q)
+        if isinstance(source, MujocoSource):
+            return source.gim(q, out=self._M)
+        return source.gim(q)
+
+    def _diagonal(self, lean, source, q) -> np.ndarray:
+        if lean is not None:
+            return lean.gim_diagonal(q)
+        if source is not None:
+            return source.gim_diagonal(q)
+        if self.nv <= CRBA_DIAGONAL_MAX_NV:  # C++ CRBA beats the O(n) map in Python here
+            return pin.crba(self.robot.model, self.data, q).diagonal()
+        return GimState(self.robot, self.data, q, False).diag
+
+    def _record(self, t: float, values: list) -> Alarm | None:
+        self._series.append(t, values)
         if self.alarm_metric is None:
             return None
-        value = self.series[self.alarm_metric][-1]
+        value = self._series.last(self.alarm_metric)
         above = self.metrics[self.alarm_metric].severity(value) > self.alarm_threshold
         alarm = None
         if above and not self._alarm_on:
@@ -291,20 +423,30 @@ class Watch:
         metric = self.metrics.get("scaled_diagonal_ratio")
         return None if metric is None else metric.estimator.alpha
 
+    @property
+    def times(self) -> np.ndarray:
+        """The sample times (s) so far (a read-only view)."""
+        return self._series.times
+
+    @property
+    def series(self) -> dict[str, np.ndarray]:
+        """Name -> the watched metric's values so far (read-only views; vector metrics 2-D)."""
+        return self._series.columns()
+
     def array(self, name: str) -> np.ndarray:
         """One series as an array: ``"t"`` (s) or a watched metric (vector metrics: 2-D)."""
         if name == "t":
-            return np.asarray(self.times, dtype=float)
-        if name not in self.series:
-            watched = list(self.series)
+            return self.times.copy()
+        if name not in self.metrics:
+            watched = list(self.metrics)
             raise InputError("the series name", f"'t' or a watched metric {watched}", name)
-        return np.asarray(self.series[name], dtype=float)
+        return self.series[name].copy()
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The series as arrays, keyed ``watch_<metric>`` plus ``watch_t``."""
-        out = {"watch_t": np.asarray(self.times, dtype=float)}
+        out = {"watch_t": self.times.copy()}
         for name, values in self.series.items():
-            out[f"watch_{name}"] = np.asarray(values, dtype=float)
+            out[f"watch_{name}"] = values.copy()
         return out
 
     def to_dataframe(self):
@@ -333,7 +475,7 @@ class Watch:
         """
         from gimwatch.output.figures import plot_watch
 
-        scalar = [n for n, values in self.series.items() if not values or np.ndim(values[0]) == 0]
+        scalar = [name for name, metric in self.metrics.items() if not metric.vector]
         chosen = scalar if metrics is None else list(metrics)
         unknown = [n for n in chosen if n not in scalar]
         if unknown or not chosen:
@@ -360,3 +502,22 @@ class Watch:
             f"Watch(robot={robot!r}, metrics={list(self.metrics)}, samples={len(self.times)}, "
             f"alarms={len(self.alarms)}{alarm})"
         )
+
+
+#: Above this nv a κ-only watch solves with NumPy's ``eigvalsh`` (after the compiled scale
+#: check): its LAPACK build beats the one numba calls there, and its wrapper's µs no longer count.
+NUMPY_EIG_MIN_NV = 24
+
+#: Up to this nv, δ of a ``pinocchio.Model`` without URDF reads CRBA's diagonal (C++, O(n²))
+#: rather than the O(n) centroidal map, whose Python around Pinocchio costs more.
+CRBA_DIAGONAL_MAX_NV = 40
+
+
+def _time(t) -> float:
+    try:
+        t = float(t)
+    except (TypeError, ValueError):
+        raise InputError("t", "a time in seconds", t) from None
+    if not -math.inf < t < math.inf:
+        raise InputError("t", "a finite time in seconds", t)
+    return t

@@ -1,10 +1,10 @@
 """Alarms of the watch: the record of an upward crossing, its warning, the default threshold.
 
-The watch ([`Watch`][gimwatch.metrics.watch.Watch]) compares one watched metric with a
+The watch ([`Watch`][gimwatch.watch.watch.Watch]) compares one watched metric with a
 threshold at every sample and acts once per *upward* crossing: it records an
-[`Alarm`][gimwatch.metrics.alarm.Alarm], calls the user's ``on_alarm(alarm)`` and/or issues
+[`Alarm`][gimwatch.watch.alarm.Alarm], calls the user's ``on_alarm(alarm)`` and/or issues
 [`IllConditionedWarning`][gimwatch.errors.IllConditionedWarning]
-([`warn_alarm`][gimwatch.metrics.alarm.warn_alarm]). The default threshold is the one
+([`warn_alarm`][gimwatch.watch.alarm.warn_alarm]). The default threshold is the one
 [`warn_if_ill_conditioned`][gimwatch.metrics.conditioning.warn_if_ill_conditioned] documents: κ·eps
 = `ILL_CONDITIONED_KAPPA_EPS`.
 """

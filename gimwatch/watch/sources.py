@@ -1,19 +1,19 @@
 """Where a watch gets M(q) in a loop gimwatch does not own: MuJoCo, a Pinocchio model, a matrix.
 
-Each source offers what [`Watch`][gimwatch.metrics.watch.Watch] asks of its ``dynamics``:
+Each source offers what [`Watch`][gimwatch.watch.watch.Watch] asks of its ``dynamics``:
 ``nv``, ``dof_names``, ``gim(q)`` (the full M) and ``gim_diagonal(q)`` (diag M only, O(n),
 no M formed), so that a metric nobody watches is never paid for.
 
-* [`MujocoSource`][gimwatch.metrics.watch_sources.MujocoSource] — M from a MuJoCo
+* [`MujocoSource`][gimwatch.watch.sources.MujocoSource] — M from a MuJoCo
   ``MjModel``/``MjData`` pair. With ``q=None`` it reads the M that MuJoCo already holds in the
   user's ``data`` (``mujoco.mj_fullM``, or the diagonal entries of ``data.M`` alone): no dynamics is
   recomputed. MuJoCo computes M at the start of ``mj_step``, before integrating, so after
   ``mj_step`` it is M at the configuration the step started from; after ``mj_forward`` it is M at
   ``data.qpos``. With ``q`` given (MuJoCo's ``qpos`` layout) M is computed at ``q`` on a private
   ``MjData`` and the user's ``data`` is left untouched.
-* [`GivenMatrix`][gimwatch.metrics.watch_sources.GivenMatrix] — the M (or diag M) the caller already
+* [`GivenMatrix`][gimwatch.watch.sources.GivenMatrix] — the M (or diag M) the caller already
   holds.
-* [`robot_from_model`][gimwatch.metrics.watch_sources.robot_from_model] — a ``pinocchio.Model``
+* [`robot_from_model`][gimwatch.watch.sources.robot_from_model] — a ``pinocchio.Model``
   wrapped as a gimwatch [`Robot`][gimwatch.model.robots.Robot] (M from Pinocchio's CRBA, diag M
   without M).
 
@@ -35,16 +35,44 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics.conditioning import extreme_ratio
+from gimwatch.metrics.conditioning import check_gim
 from gimwatch.model.robots import Robot
 
-__all__ = ["GivenMatrix", "MujocoSource", "import_mujoco", "robot_from_model", "type_name"]
+__all__ = [
+    "GivenMatrix",
+    "MujocoSource",
+    "import_mujoco",
+    "real_array",
+    "robot_from_model",
+    "type_name",
+]
+
+#: |‖quaternion‖| below this in a free or ball joint's qpos is refused (MuJoCo would
+#: normalise a zero quaternion to an arbitrary rotation).
+MIN_QUATERNION_NORM = 1e-6
 
 
 def type_name(value: object) -> str:
     """``module.Class`` of a value, for messages about a wrong type."""
     kind = type(value)
     return f"{kind.__module__}.{kind.__qualname__}"
+
+
+def real_array(value: npt.ArrayLike, name: str) -> np.ndarray:
+    """``value`` as a float array, or an InputError naming ``name`` (complex, text, ragged).
+
+    A complex array is refused rather than cast: the cast drops the imaginary part (NumPy
+    only warns), which gives a wrong κ.
+    """
+    try:
+        array = np.asarray(value)
+        if array.dtype.kind == "O":  # Python numbers (Fraction, mpmath.mpf, ...)
+            return array.astype(float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(name, "an array of real numbers", str(exc)) from None
+    if array.dtype.kind not in "biuf":
+        raise InputError(name, "an array of real numbers", f"{array.dtype.name} entries")
+    return array.astype(float)
 
 
 def robot_from_model(model: pin.Model, *, name: str | None = None) -> Robot:
@@ -87,20 +115,26 @@ class GivenMatrix:
         self.dof_names = tuple(str(n) for n in names)
         self._M: np.ndarray | None = None
         self._diag: np.ndarray | None = None
+        from gimwatch.model.kernels import positive_ratio  # numba: only for a matrix watch
+
+        self._positive_ratio = positive_ratio
 
     def hold_matrix(self, matrix: npt.ArrayLike) -> None:
-        """Hold M for the next sample; checks its shape and finiteness."""
-        M = np.asarray(matrix, dtype=float)
+        """Hold M for the next sample; checks it is real, of shape (nv, nv), finite, symmetric.
+
+        Definiteness is checked by the solve that uses M (or by the watch's Cholesky).
+        """
+        M = real_array(matrix, "M")
         if M.shape != (self.nv, self.nv):
             raise InputError("M", f"a ({self.nv}, {self.nv}) matrix", f"shape {M.shape}")
         if not np.all(np.isfinite(M)):
             i, j = np.argwhere(~np.isfinite(M))[0]
             raise InputError("M", "finite", f"{M[i, j]} at ({i}, {j})")
-        self._M, self._diag = M, None
+        self._M, self._diag = check_gim(M), None
 
     def hold_diagonal(self, diagonal: npt.ArrayLike) -> None:
         """Hold diag M for the next sample; checks its shape, finiteness and sign."""
-        d = np.asarray(diagonal, dtype=float)
+        d = real_array(diagonal, "the diagonal")
         if d.shape != (self.nv,):
             raise InputError("the diagonal", f"a vector of {self.nv} numbers", f"shape {d.shape}")
         if not np.all(np.isfinite(d) & (d > 0)):
@@ -109,9 +143,8 @@ class GivenMatrix:
         self._M, self._diag = None, d
 
     def diagonal_ratio(self, q=None) -> float:
-        """δ of the held diagonal, unchecked (NaN or < 1 sends the watch to its checked path)."""
-        diag = self.gim_diagonal()
-        return extreme_ratio(diag)
+        """δ of the held diagonal; NaN (the watch's checked path) unless all are finite and > 0."""
+        return self._positive_ratio(self.gim_diagonal())
 
     def gim(self, q=None) -> np.ndarray:
         """The held M."""
@@ -175,6 +208,20 @@ class MujocoSource:
                 hint="only dof_armature can be removed",
             )
         self._armature = None if armature else np.array(model.dof_armature, dtype=float)
+        #: Whether M is positive definite by construction; a negative armature may break it,
+        #: and then the watch checks M at every sample.
+        self.trusted = not np.any(np.asarray(model.dof_armature) < 0)
+        joint_type = mujoco.mjtJoint
+        quaternion_joints = (model.jnt_type == joint_type.mjJNT_FREE) | (
+            model.jnt_type == joint_type.mjJNT_BALL
+        )
+        starts = model.jnt_qposadr[quaternion_joints] + np.where(
+            model.jnt_type[quaternion_joints] == joint_type.mjJNT_FREE, 3, 0
+        )
+        self._quaternions = np.asarray(starts, dtype=np.intp)[:, None] + np.arange(4)
+        from gimwatch.model.kernels import positive_ratio  # numba: only for a MuJoCo watch
+
+        self._positive_ratio = positive_ratio
         self._light = not extra  # kinematics + CRB suffice for M at a given q
         self._own = None
         self._order: np.ndarray | None = None
@@ -238,11 +285,19 @@ class MujocoSource:
                     hint="call mujoco.mj_forward(model, data) or mj_step first",
                 )
             return data
-        qpos = np.asarray(q, dtype=float)
+        qpos = real_array(q, "q")
         if qpos.shape != (model.nq,):
             raise InputError("q", f"a qpos of {model.nq} numbers (MuJoCo's layout)", qpos.shape)
         if not np.all(np.isfinite(qpos)):
             raise InputError("q", "finite", qpos.tolist())
+        if self._quaternions.size:
+            norms = np.linalg.norm(qpos[self._quaternions], axis=1)
+            if np.any(norms < MIN_QUATERNION_NORM):
+                k = int(np.argmin(norms))
+                start = int(self._quaternions[k, 0])
+                raise InputError(
+                    f"the quaternion q[{start}:{start + 4}]", "non-zero", qpos[start : start + 4]
+                )
         if self._own is None:
             self._own = mujoco.MjData(model)
         data = self._own
@@ -255,10 +310,10 @@ class MujocoSource:
             mujoco.mj_fwdPosition(model, data)
         return data
 
-    def gim(self, q=None) -> np.ndarray:
-        """M (``mj_fullM``), in the robot's coordinates when one was given."""
+    def gim(self, q=None, out: np.ndarray | None = None) -> np.ndarray:
+        """M (``mj_fullM``, into ``out`` if given), in the robot's coordinates if one was given."""
         data = self._data_at(q)
-        M = np.empty((self.nv, self.nv))
+        M = np.empty((self.nv, self.nv)) if out is None else out
         self._mujoco.mj_fullM(self.model, data, M)
         if self._armature is not None:
             M[np.diag_indices(self.nv)] -= self._armature
@@ -280,11 +335,11 @@ class MujocoSource:
         return diag if self._order is None else diag[self._order]
 
     def diagonal_ratio(self, q=None) -> float:
-        """δ = max M_ii / min M_ii, unchecked (NaN or < 1 sends the watch to its checked path)."""
+        """δ = max M_ii / min M_ii; NaN (the watch's checked path) unless all are finite and > 0."""
         diag = self._data_at(q).M[self._diag_index]
         if self._armature is not None:
             diag = diag - self._armature
-        return extreme_ratio(diag)
+        return self._positive_ratio(diag)
 
 
 def _rotation(quaternion_wxyz: np.ndarray) -> np.ndarray:
