@@ -89,7 +89,11 @@ def test_one_definition_of_the_ratios():
         for k, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
         if pattern.search(line)
     ]
-    allowed = {"gimwatch/metrics/conditioning.py", "gimwatch/survey/trajectory.py"}  # κ spread
+    allowed = {
+        "gimwatch/metrics/conditioning.py",
+        "gimwatch/survey/trajectory.py",  # κ spread
+        "gimwatch/bench/watch_overhead.py",  # the user's own two lines, the bench's baseline
+    }
     assert [f for f in found if f.split(":")[0] not in allowed] == [], found
     assert sum(f.startswith("gimwatch/metrics/conditioning.py") for f in found) == 1
 

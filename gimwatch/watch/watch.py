@@ -22,7 +22,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics.conditioning import ldlt_pivots
+from gimwatch.metrics.conditioning import extreme_ratio, ldlt_pivots
 from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.registry import METRICS, GimState
 from gimwatch.model.robots import (
@@ -350,7 +350,7 @@ class Watch:
             if not scale > 0.0:
                 return None
             values = np.linalg.eigvalsh(M if scale == 1.0 else M * (1.0 / scale))
-            value = values[-1] / values[0]
+            value = extreme_ratio(values)
             return [value] if value >= 1.0 else None
         if self._only_kappa:
             value = self._kernels.spectrum_ratio(self._gim(source, q))
