@@ -447,6 +447,10 @@ class Watch:
         out = {"watch_t": self.times.copy()}
         for name, values in self.series.items():
             out[f"watch_{name}"] = values.copy()
+        tracked = self.metrics.get("kappa_tracked")
+        if tracked is not None and len(tracked.fallbacks) == len(out["watch_t"]):
+            out["watch_kappa_tracked_fallback"] = np.array(tracked.fallbacks, dtype=str)
+            out["watch_kappa_tracked_error_estimate"] = np.array(tracked.error_estimates)
         return out
 
     def to_dataframe(self):
