@@ -63,10 +63,33 @@ def njit(function: Any = None, **options: Any):
 
     def decorate(python_function):
         try:
-            return numba.njit(**options)(python_function)
+            dispatcher = numba.njit(**options)(python_function)
         except RuntimeError as exc:  # numba found no folder it may write its cache in
             if "cannot cache" not in str(exc):
                 raise
             return numba.njit(**{**options, "cache": False})(python_function)
+        _tolerate_cache_write_errors(dispatcher)
+        return dispatcher
 
     return decorate if function is None else decorate(function)
+
+
+def _tolerate_cache_write_errors(dispatcher) -> None:
+    """A cache file that cannot be written (a full disk, a file size limit) is skipped.
+
+    numba writes its cache after compiling, inside the first call of the kernel, and lets an
+    OSError from that write escape into the caller: a simulation would then end with a
+    traceback for a file that is only an optimisation. The kernel runs uncached instead.
+    """
+    cache = getattr(dispatcher, "_cache", None)
+    save = getattr(cache, "save_overload", None)
+    if save is None:
+        return
+
+    def save_or_skip(signature, data):
+        try:
+            save(signature, data)
+        except OSError:
+            pass
+
+    cache.save_overload = save_or_skip

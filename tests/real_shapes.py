@@ -47,6 +47,9 @@ def arm(
     empty_dynamics: bool = False,
     mimic_of_fixed: bool = False,
     nul_tail: bool = False,
+    implicit_world: bool = False,
+    unnamed: bool = False,
+    unbound_prefix: bool = False,
     ros_extras: bool = True,
 ) -> str:
     """The arm's URDF text with the given quirks."""
@@ -55,8 +58,10 @@ def arm(
     head = ((header and XACRO_HEADER) or "") + late
     text = ("" if late_declaration else declaration) + head
     xmlns = ' xmlns="http://www.ros.org"' if namespace else ""
-    text += f'<robot name="lbr_iiwa"{xmlns} xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
-    text += '  <link name="world"/>\n  <link name="base"><inertial><origin xyz="0 0 0.1"/>'
+    name = "" if unnamed else ' name="lbr_iiwa"'  # open_manipulator's xacro output has none
+    text += f'<robot{name}{xmlns} xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
+    text += "" if implicit_world else '  <link name="world"/>\n'  # Drake's pr2_simplified
+    text += '  <link name="base"><inertial><origin xyz="0 0 0.1"/>'
     text += '<mass value="5"/><inertia ixx="0.05" ixy="0" ixz="0" iyy="0.06" iyz="0" '
     text += 'izz="0.03"/></inertial></link>\n'
     text += '  <joint name="world_joint" type="fixed"><parent link="world"/>'
@@ -104,6 +109,9 @@ def arm(
         text += '<joint name="joint_1"><hardwareInterface>EffortJointInterface</hardwareInterface>'
         text += '</joint></transmission>\n  <gazebo reference="link_1"><material>Gazebo/Grey'
         text += "</material></gazebo>\n"
+    if unbound_prefix:  # fetch.urdf of robot-assets: an old Gazebo sensor, prefix undeclared
+        text += '  <gazebo reference="link_7"><sensor:camera name="rgb"><imageSize>192 128'
+        text += "</imageSize></sensor:camera></gazebo>\n"
     text += "</robot>\n"
     if nul_tail:
         text += "\0"

@@ -30,7 +30,8 @@ from gimwatch.cli import _commands, get_argument_parser, main
 from gimwatch.errors import GimwatchError, URDFWarning
 from gimwatch.metrics.dense_analysis import analyze_configuration
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
-from gimwatch.model.robots import MAX_TREE_DEPTH, MAX_URDF_BYTES, load_robot, neutral_configuration
+from gimwatch.model.robot_files import MAX_URDF_BYTES
+from gimwatch.model.robots import MAX_TREE_DEPTH, load_robot, neutral_configuration
 from gimwatch.output.folders import write_marker
 from gimwatch.simulation.scene import MAX_SCENE_BYTES
 

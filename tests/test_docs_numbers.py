@@ -446,7 +446,8 @@ def test_triangle_inequality_warning_count_is_the_robots_that_warn():
     import warnings
 
     from gimwatch.errors import URDFWarning
-    from gimwatch.model.robots import _read_urdf, example_robot_urdf
+    from gimwatch.model.robot_files import read_robot_file
+    from gimwatch.model.robots import example_robot_urdf
     from gimwatch.model.urdf_text import check_urdf
 
     warned = []
@@ -454,7 +455,7 @@ def test_triangle_inequality_warning_count_is_the_robots_that_warn():
         path = example_robot_urdf(name)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            check_urdf(_read_urdf(path), str(path))
+            check_urdf(read_robot_file(path), str(path))
         if any(issubclass(w.category, URDFWarning) for w in caught):
             warned.append(name)
     match = _find(
@@ -469,7 +470,8 @@ def test_stated_thresholds_are_the_code_constants():
     from gimwatch.cli._progress import ProgressBar
     from gimwatch.crosscheck import DEFAULT_TOLERANCE
     from gimwatch.model import urdf_values
-    from gimwatch.model.robots import DATA_NV_LIMIT, MAX_TREE_DEPTH, MAX_URDF_BYTES
+    from gimwatch.model.robot_files import MAX_URDF_BYTES
+    from gimwatch.model.robots import DATA_NV_LIMIT, MAX_TREE_DEPTH
     from gimwatch.simulation.alarm_actions import RTOL_FLOOR
     from gimwatch.simulation.integrators import MIN_STEP_FRACTION
     from gimwatch.stress import reference_planar, reference_tree, suite

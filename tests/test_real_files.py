@@ -66,11 +66,21 @@ QUIRKS = [
     "bad_shapes",
     "empty_dynamics",
     "nul_tail",
+    "implicit_world",
+    "unnamed",
+    "unbound_prefix",
 ]
 #: Read with one "lenient" warning (the others are plain XML that every parser reads).
 WARNED = set(QUIRKS) - {"header", "crlf", "bom"}
 #: Refused (or complained about) by urdfdom, Pinocchio's parser, given the raw text.
-REFUSED_RAW = {"missing_limit", "comma_origins", "bad_shapes", "empty_dynamics"}
+REFUSED_RAW = {
+    "missing_limit",
+    "comma_origins",
+    "bad_shapes",
+    "empty_dynamics",
+    "implicit_world",
+    "unnamed",
+}
 
 
 def _write(tmp_path, name: str, text: str):

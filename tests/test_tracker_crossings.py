@@ -93,3 +93,39 @@ def test_kappa_is_exact_at_every_sample_through_a_branch_crossing(
                 crossings_caught += tracked.fallback == "cold"
     if not floating:  # fixed base: the branches' modes are decoupled, and do cross unseen
         assert crossings_caught >= 1
+
+
+def test_each_samples_fallback_and_error_bound_reach_the_series_and_results(tmp_path):
+    import json
+
+    from gimwatch.cli import main
+    from gimwatch.watch import Watch
+
+    path = tmp_path / "y_tree.urdf"
+    path.write_text(y_tree_urdf(30), encoding="utf-8")
+    robot = load_robot(path)
+    watch = Watch(robot, ("kappa_tracked",))
+    names = robot.dof_names
+    branch_a = np.array([i for i, name in enumerate(names) if name.startswith("ja")])
+    branch_b = np.array([i for i, name in enumerate(names) if name.startswith("jb")])
+    shape = np.random.default_rng(0).uniform(0.2, 1.0, 30) * 0.3
+    for k, s in enumerate(np.linspace(0.0, 1.0, 41)):
+        motion = np.zeros(robot.nv)
+        motion[branch_a], motion[branch_b] = s * shape, (1 - s) * shape
+        watch.sample(0.01 * k, pin.integrate(robot.model, pin.neutral(robot.model), motion))
+    arrays = watch.arrays()
+    labels = list(arrays["watch_kappa_tracked_fallback"])
+    assert labels[0] == "start" and set(labels) <= {"start", "", "cold", "dense"}
+    bounds = arrays["watch_kappa_tracked_error_estimate"]
+    assert bounds.shape == (41,) and np.all((bounds >= 0) & (bounds < 1e-8))
+    scene = tmp_path / "scene.toml"
+    scene.write_text(
+        'robot = "chain:12"\nduration = 0.1\nsample = 0.02\nq = 0.1\n'
+        '[integrator]\nmethod = "RK4"\ndt = 0.005\n[watch]\nmetrics = ["kappa_tracked"]\n',
+        encoding="utf-8",
+    )
+    assert main(["simulate", str(scene), "-o", str(tmp_path / "out")]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
+    assert summary["kappa_tracked_fallbacks"] == {"start": 1, "warm": 5}
+    header = (tmp_path / "out" / "watch.csv").read_text(encoding="utf-8").splitlines()[0]
+    assert header == "t,kappa_tracked,kappa_tracked_fallback,kappa_tracked_error_estimate"

@@ -82,6 +82,9 @@ def run(args: argparse.Namespace) -> int:
             lines.append(f"min rcond: {float(trajectory.watch['watch_rcond'].min()):.6g}")
         else:
             lines.append(f"max {name}: {value:.6g}")
+    if summary.get("kappa_tracked_fallbacks"):
+        counts = summary["kappa_tracked_fallbacks"]
+        lines.append("kappa_tracked samples: " + ", ".join(f"{k} {n}" for k, n in counts.items()))
     quality = summary["estimator_quality"]
     if isinstance(quality, dict):
         lines.append(

@@ -33,6 +33,7 @@ import pinocchio as pin
 from scipy.optimize import linprog
 
 from gimwatch.errors import ConditioningError, InputError
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
@@ -197,7 +198,7 @@ def _applied(robot: Robot, qs: np.ndarray, added: np.ndarray):
         g = pin.computeGeneralizedGravity(model, data, q)
         for matrix, out in ((M, before), (MA, after)):
             w = np.linalg.eigvalsh(matrix)
-            out.append(float(w[-1] / w[0]))
+            out.append(extreme_ratio(w))
         qdd, qdd_armed = np.linalg.solve(M, -g), np.linalg.solve(MA, -g)
         scale = np.linalg.norm(qdd)
         change.append(float(np.linalg.norm(qdd_armed - qdd) / scale) if scale > 0 else 0.0)

@@ -21,6 +21,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.explain.bodies import body_energies, body_names, body_split, dof_joint_ranges
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
@@ -123,7 +124,7 @@ def gim_modes(robot: Robot, q: npt.ArrayLike | None = None) -> GimModes:
     return GimModes(
         robot=robot.name,
         q=tuple(float(x) for x in q),
-        kappa=float(w[-1] / w[0]),
+        kappa=extreme_ratio(w),
         lowest=modes[0],
         highest=modes[1],
     )

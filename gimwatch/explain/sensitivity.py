@@ -34,6 +34,7 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.explain.bodies import BodySplit, body_names, body_split, dof_joint_ranges
+from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
@@ -225,7 +226,7 @@ def kappa_sensitivities(
     projected = _projected_derivatives(model, body_split(robot, q, data=data), V)
     d_min = np.linalg.eigvalsh(projected[:, :low, :low])[:, 0]
     d_max = np.linalg.eigvalsh(projected[:, low:, low:])[:, -1]
-    kappa = float(w[-1] / w[0])
+    kappa = extreme_ratio(w)
     dkappa = (d_max - kappa * d_min) / w[0]
     records = []
     for (owner, name, value, unit), dk in zip(parameter_table(robot), dkappa, strict=True):

@@ -233,7 +233,10 @@ class KappaTracked(Metric):
     [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on DeNOC's
     compiled M·x and M⁻¹·y (or Pinocchio's RNEA/ABA when DeNOC cannot read the robot), warm-started
     from the previous sample's eigenvectors, with a detected cold-start fallback. ``products`` lists
-    the O(n) products each sample took.
+    the O(n) products each sample took, ``fallbacks`` each sample's fallback (``""``, ``"cold"``,
+    ``"dense"``, ...) and ``error_estimates`` its relative error bound. A sample the O(n) solve
+    cannot certify falls back to a dense eigen-solve of M (Pinocchio's CRBA or the backend's
+    ``gim``) instead of raising.
     """
 
     name = "kappa_tracked"
@@ -242,16 +245,25 @@ class KappaTracked(Metric):
     def __init__(self) -> None:
         self.tracker = None
         self.products: list[int] = []
+        self.fallbacks: list[str] = []
+        self.error_estimates: list[float] = []
 
     def __call__(self, state):
         if self.tracker is None:
             from gimwatch.metrics.tracker import KappaTracker
             from gimwatch.metrics.tracker.providers import gim_products
 
-            provider = state.lean or gim_products(state.robot, state.dynamics, state.data)
-            self.tracker = KappaTracker(provider, state.robot.nv)
+            robot, dynamics, data = state.robot, state.dynamics, state.data
+            provider = state.lean or gim_products(robot, dynamics, data)
+
+            def dense(q: np.ndarray) -> np.ndarray:
+                return gim(robot, q, data=data) if dynamics is None else dynamics.gim(q)
+
+            self.tracker = KappaTracker(provider, robot.nv, dense=dense)
         result = self.tracker.sample(state.q)
         self.products.append(result.products)
+        self.fallbacks.append(result.fallback)
+        self.error_estimates.append(float(result.error_estimate))
         return result.kappa
 
 

@@ -24,8 +24,6 @@ when they need it.
 from __future__ import annotations
 
 import difflib
-import errno
-import os
 import re
 import warnings
 from dataclasses import dataclass, field
@@ -45,6 +43,7 @@ from gimwatch.model.example_robots import (
     example_robot_urdf,
 )
 from gimwatch.model.mjcf_model import is_mjcf
+from gimwatch.model.robot_files import read_robot_file
 from gimwatch.model.sampling import (
     PLACEHOLDER_LIMIT,
     check_random_budget,
@@ -74,8 +73,6 @@ __all__ = [
 _CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
 #: Above this many velocity coordinates, a Pinocchio Data would need several GB.
 DATA_NV_LIMIT = 400
-#: The largest URDF file read (the biggest example-robot-data URDF is under 1 MB).
-MAX_URDF_BYTES = 64 * 1024 * 1024
 #: Pinocchio's URDF parser recurses once per link along a branch and overflows the 8 MB
 #: C stack (a segmentation fault) between 3500 and 4000 links; deeper trees are refused.
 MAX_TREE_DEPTH = 2000
@@ -148,55 +145,6 @@ class Robot:
         if self.nv > DATA_NV_LIMIT:
             raise _too_large(self.spec, self.nv)
         return self.model.createData()
-
-
-def _read_urdf(path: Path) -> str:
-    """Read a URDF file; FIFOs and devices are refused (they could block or never end)."""
-    try:
-        if not path.exists():
-            raise URDFError(str(path), path_problem(path))
-        if path.is_dir():
-            raise URDFError(str(path), "is a directory, not a URDF file")
-        if not path.is_file():
-            raise URDFError(str(path), "is not a regular file (a device, FIFO or socket)")
-        size = path.stat().st_size
-        if size > MAX_URDF_BYTES:
-            raise URDFError(str(path), f"is {size} bytes, more than {MAX_URDF_BYTES} for a URDF")
-        return decode_xml(path.read_bytes(), str(path))
-    except OSError as exc:
-        raise URDFError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
-
-
-def decode_xml(data: bytes, source: str) -> str:
-    """XML bytes as text: UTF-8 without a byte-order mark, or the declared encoding.
-
-    CAD exporters write ``<?xml version="1.0" encoding="ISO-8859-1"?>`` with accented
-    names in comments; a file that is neither is refused naming the first bad byte.
-    """
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        failure = exc
-    _, found, rest = data[:200].decode("ascii", errors="replace").partition("encoding=")
-    declared = rest[1:].split(rest[0], 1)[0] if found and rest[:1] in ("'", '"') else ""
-    try:
-        if declared and declared.lower().replace("_", "-") not in ("utf-8", "utf8"):
-            return data.decode(declared)
-    except (LookupError, UnicodeDecodeError):
-        pass
-    raise URDFError(
-        source, f"is not UTF-8 text ({failure.reason} at byte {failure.start})"
-    ) from failure
-
-
-def path_problem(path: Path) -> str:
-    """Why a path that does not exist cannot be opened: a symbolic-link loop, or no file."""
-    try:
-        os.stat(path)
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            return "is a symbolic link loop (too many levels of symbolic links)"
-    return "no such file"
 
 
 def _build_model(xml: str, source: str, floating: bool) -> tuple[pin.Model, str]:
@@ -360,12 +308,12 @@ def load_robot(
         xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
     elif text in example_robot_loaders():
         path = example_robot_urdf(text)
-        xml, source, name = _read_urdf(path), str(path), text
+        xml, source, name = read_robot_file(path), str(path), text
         if text in EXAMPLE_ROBOT_NOTES:
             warnings.warn(f"{text}: {EXAMPLE_ROBOT_NOTES[text]}", ExampleRobotWarning, stacklevel=2)
     elif text.lower().endswith((".urdf", ".xml")) or Path(text).exists() or "/" in text:
         path = Path(text)
-        xml, source, name = _read_urdf(path), str(path), path.stem
+        xml, source, name = read_robot_file(path), str(path), path.stem
         if is_mjcf(xml):
             return _mjcf_robot(xml, source, name, text, floating, body, armature)
     else:

@@ -17,8 +17,14 @@ and listed in one [`URDFWarning`][gimwatch.errors.URDFWarning] per file:
   ``lower > upper`` (Bullet's "no limit"): the position range becomes the placeholder
   ±`gimwatch.model.sampling.PLACEHOLDER_LIMIT` (random draws use ±π rad / ±1 m);
 * an empty ``<dynamics/>`` (removed; damping and friction do not enter M);
+* extension elements with an undeclared namespace prefix (``<sensor:camera>`` in old Gazebo
+  blocks; expat refuses the whole file, urdfdom ignores namespaces): removed;
+* a ``<robot>`` without a name (urdfdom refuses it): named after the file;
 * a ``<mimic>`` of a fixed joint: the follower would stay at its offset; like every mimic
-  joint it is modelled as an independent joint, as Pinocchio does.
+  joint it is modelled as an independent joint, as Pinocchio does;
+* a joint whose parent is an undeclared link named ``world`` (Drake's and Gazebo's name for
+  the fixed frame, e.g. Drake's ``pr2_simplified.urdf``): ``<link name="world"/>`` is added,
+  massless, so the robot is attached to the fixed base as those readers attach it.
 
 What makes M undefined or wrong is still refused by the value checks
 (`gimwatch.model.urdf_values`): non-finite or unparsable numbers in origins, axes and
@@ -33,7 +39,13 @@ import xml.etree.ElementTree as ET
 
 from gimwatch.errors import URDFError, URDFWarning
 
-__all__ = ["fix_namespace", "fix_text_quirks", "fix_tree_quirks", "warn_quirks"]
+__all__ = [
+    "fix_namespace",
+    "fix_text_quirks",
+    "fix_tree_quirks",
+    "parse_ignoring_prefixes",
+    "warn_quirks",
+]
 
 #: The placeholder range written for a limit that means "unlimited" (see sampling).
 _UNLIMITED = "1000"
@@ -75,6 +87,41 @@ def _misplaced_declaration(xml: str) -> tuple[int, int] | None:
         return None
     close = xml.find("?>", position)
     return None if close < 0 else (position, close + 2)
+
+
+def parse_ignoring_prefixes(xml: str) -> tuple[ET.Element, list[str]]:
+    """Parse without namespaces, as urdfdom does, and drop elements with a prefix.
+
+    For texts expat refuses with "unbound prefix": URDF's own elements never have one, so
+    a prefixed element (and a prefixed attribute) is an extension no URDF reader uses.
+
+    Raises:
+        ET.ParseError: The text is not well-formed XML even without namespaces.
+    """
+    from xml.parsers import expat
+
+    builder = ET.TreeBuilder()
+    parser = expat.ParserCreate()
+    parser.StartElementHandler = builder.start
+    parser.EndElementHandler = builder.end
+    parser.CharacterDataHandler = builder.data
+    try:
+        parser.Parse(xml, True)
+    except expat.ExpatError as exc:
+        raise ET.ParseError(str(exc)) from None
+    root = builder.close()
+    removed = []
+    for parent in list(root.iter()):
+        for child in list(parent):
+            if ":" in child.tag:
+                parent.remove(child)
+                removed.append(f"<{child.tag}>")
+        for key in [key for key in parent.attrib if ":" in key or key == "xmlns"]:
+            del parent.attrib[key]  # declarations too: the tags are read without namespaces
+            if not key.startswith("xmlns"):
+                removed.append(f"{key}=")
+    shown = ", ".join(dict.fromkeys(removed[:20]))
+    return root, [f"elements and attributes with an undeclared namespace prefix removed ({shown})"]
 
 
 def _strip_namespaces(root: ET.Element) -> bool:
@@ -239,16 +286,39 @@ def _mimics_of_fixed(root: ET.Element, kinds: dict[str, str | None]) -> list[str
     ]
 
 
+def _implicit_world(root: ET.Element) -> list[str]:
+    """Declare the ``world`` link that joints name as their parent without declaring it."""
+    if any(link.get("name") == "world" for link in root.findall("link")):
+        return []
+    joints = [
+        joint.get("name")
+        for joint in root.findall("joint")
+        if (parent := joint.find("parent")) is not None and parent.get("link") == "world"
+    ]
+    if not joints:
+        return []
+    root.insert(0, ET.Element("link", name="world"))
+    shown = ", ".join(joints[:3]) + (", ..." if len(joints) > 3 else "")
+    return [f"the undeclared parent link 'world' of {shown} added as the fixed base (massless)"]
+
+
 def fix_tree_quirks(root: ET.Element, source: str) -> list[str]:
     """Normalise, in place, what urdfdom would refuse but M does not depend on."""
     if root.tag != "robot":
         raise URDFError(source, f"the root element must be <robot>, got <{root.tag}>")
+    unnamed = []
+    if not (root.get("name") or "").strip():
+        name = source.replace("\\", "/").rsplit("/", 1)[-1].rsplit(".", 1)[0].strip("<>")
+        root.set("name", name or "robot")
+        unnamed = [f"a <robot> without a name named {root.get('name')!r}"]
     kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
     return [
         *_commas_as_spaces(root),
         *_drop_unreadable_shapes(root),
         *_limit_quirks(root, kinds),
         *_mimics_of_fixed(root, kinds),
+        *_implicit_world(root),
+        *unnamed,
     ]
 
 

@@ -17,6 +17,7 @@ from gimwatch.model.urdf_quirks import (
     fix_namespace,
     fix_text_quirks,
     fix_tree_quirks,
+    parse_ignoring_prefixes,
     warn_quirks,
 )
 from gimwatch.model.urdf_values import (
@@ -134,7 +135,13 @@ def _parse(xml: str, source: str) -> tuple[ET.Element, list[str]]:
             raise URDFError(source, f"{token.lstrip('<!')} declarations are not allowed in a URDF")
     _check_budget(text, source)
     try:
-        root = ET.fromstring(xml)
+        try:
+            root = ET.fromstring(xml)
+        except ET.ParseError as exc:
+            if "unbound prefix" not in str(exc):
+                raise
+            root, prefixed = parse_ignoring_prefixes(xml)
+            fixes += prefixed
     except ET.ParseError as exc:
         raise URDFError(source, f"malformed XML ({exc})") from exc
     depth = _element_depth(root)

@@ -48,8 +48,14 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
     maxima = {
         key.removeprefix("watch_"): float(np.max(value))
         for key, value in watch.items()
-        if key != "watch_t" and value.ndim == 1 and value.size
+        if key != "watch_t" and value.ndim == 1 and value.size and value.dtype.kind == "f"
     }
+    fallbacks = None  # how many κ-tracker samples were warm, cold restarts, dense solves
+    if "watch_kappa_tracked_fallback" in watch:
+        labels, counts = np.unique(watch["watch_kappa_tracked_fallback"], return_counts=True)
+        fallbacks = {
+            (str(label) or "warm"): int(n) for label, n in zip(labels, counts, strict=True)
+        }
     return {
         "scene": {"source": scene.source, **scene.raw},
         "robot": trajectory.robot,
@@ -76,6 +82,7 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
             if isinstance(quality, dict)
             else None
         ),
+        "kappa_tracked_fallbacks": fallbacks,
         "estimator_quality": quality,
         "alarms": [asdict(alarm) for alarm in trajectory.alarms],
         "actions": list(trajectory.actions),
@@ -83,9 +90,10 @@ def summarize(trajectory: Trajectory) -> dict[str, Any]:
 
 
 def _csv(header: list[str], columns: list[np.ndarray]) -> str:
-    rows = np.column_stack(columns) if columns else np.empty((0, 0))
+    """Numbers as repr(float) (round-trip exact); text columns (a fallback label) as they are."""
     lines = [",".join(header)]
-    lines += [",".join(repr(float(x)) for x in row) for row in rows]
+    rows = zip(*columns, strict=True)
+    lines += [",".join(x if isinstance(x, str) else repr(float(x)) for x in row) for row in rows]
     return "\n".join(lines) + "\n"
 
 

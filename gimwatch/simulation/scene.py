@@ -16,13 +16,14 @@ by `joint_vector` when the simulation is built, because the names are the robot'
 
 from __future__ import annotations
 
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from gimwatch.errors import SceneError
-from gimwatch.model.robots import path_problem
+from gimwatch.model.robot_files import path_problem
 from gimwatch.simulation.alarm_actions import ALARM_ACTIONS
 from gimwatch.simulation.backends import BACKENDS as BACKEND_CLASSES
 from gimwatch.simulation.bundled_scenes import missing_scene_hint, resolve_scene
@@ -103,6 +104,13 @@ _TOP_KEYS = {
 MAX_SAMPLES = 1_000_000
 MAX_INITIAL_STATE = 1e6
 MAX_SCENE_BYTES = 1024 * 1024
+#: The most dotted parts a TOML key is read with: tomllib's time grows with the square of
+#: a key's parts (18 s for ``a.a.a...`` of 20,000, hours for a 1 MB one); scene keys have 3.
+MAX_KEY_PARTS = 64
+# Possessive quantifiers and the look-behind (a key starts where no word or dot precedes)
+# keep this scan linear: each attempt reads at most MAX_KEY_PARTS parts.
+_PART = r"""(?:[\w-]++|"[^"\n]*+"|'[^'\n]*+')"""
+_LONG_KEY = re.compile(rf"(?<![\w.-])(?:{_PART}[ \t]*+\.[ \t]*+){{{MAX_KEY_PARTS}}}")
 
 
 @dataclass(frozen=True)
@@ -354,8 +362,16 @@ def load_scene(path: str | Path) -> Scene:
         raise SceneError(str(path), "", "no such file") from exc
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(str(path), "", f"cannot be read ({exc.__class__.__name__})") from exc
+    return parse_scene(_read_toml(text, str(path)), source=str(path), base_dir=path.parent)
+
+
+def _read_toml(text: str, source: str) -> dict[str, Any]:
+    """The TOML table of a scene's text, in time linear in its length, or a SceneError."""
+    if _LONG_KEY.search(text):
+        raise SceneError(source, "", f"has a dotted key of more than {MAX_KEY_PARTS} parts")
     try:
-        table = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(str(path), "", f"is not valid TOML ({exc})") from exc
-    return parse_scene(table, source=str(path), base_dir=path.parent)
+        return tomllib.loads(text)
+    except RecursionError:  # tomllib recurses once per level of nested arrays/tables
+        raise SceneError(source, "", "has arrays or inline tables nested too deeply") from None
+    except ValueError as exc:  # TOMLDecodeError, or an integer of more than 4300 digits
+        raise SceneError(source, "", f"is not valid TOML ({exc})") from exc

@@ -22,7 +22,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics.conditioning import ldlt_pivots
+from gimwatch.metrics.conditioning import extreme_ratio, ldlt_pivots
 from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.registry import METRICS, GimState
 from gimwatch.model.robots import (
@@ -350,7 +350,7 @@ class Watch:
             if not scale > 0.0:
                 return None
             values = np.linalg.eigvalsh(M if scale == 1.0 else M * (1.0 / scale))
-            value = values[-1] / values[0]
+            value = extreme_ratio(values)
             return [value] if value >= 1.0 else None
         if self._only_kappa:
             value = self._kernels.spectrum_ratio(self._gim(source, q))
@@ -447,6 +447,10 @@ class Watch:
         out = {"watch_t": self.times.copy()}
         for name, values in self.series.items():
             out[f"watch_{name}"] = values.copy()
+        tracked = self.metrics.get("kappa_tracked")
+        if tracked is not None and len(tracked.fallbacks) == len(out["watch_t"]):
+            out["watch_kappa_tracked_fallback"] = np.array(tracked.fallbacks, dtype=str)
+            out["watch_kappa_tracked_error_estimate"] = np.array(tracked.error_estimates)
         return out
 
     def to_dataframe(self):
