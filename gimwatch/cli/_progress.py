@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import sys
 
-from tqdm import tqdm
-
 
 class ProgressBar:
     """Called with the fraction done; draws after ``delay_s``, at most ``rate_hz`` per second."""
 
     def __init__(self, label: str, *, delay_s: float = 2.0, rate_hz: float = 5.0, stream=None):
+        from tqdm import tqdm  # here, not at import: a short command should not pay for it
+
         self.bar = tqdm(
             total=1.0,
             desc=label,
@@ -48,6 +48,8 @@ class ItemProgress:
     def __init__(self, label: str, total: int, *, stream=None) -> None:
         self.label, self.total, self.index = label, total, 0
         self.stream = sys.stderr if stream is None else stream
+        from tqdm import tqdm
+
         self.bar = tqdm(
             total=total, desc=label, file=self.stream, leave=False, disable=None, unit="robot"
         )
