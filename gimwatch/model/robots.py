@@ -30,7 +30,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import ExampleRobotWarning, InputError, RobotError, URDFError
@@ -43,19 +42,21 @@ from gimwatch.model.example_robots import (
     example_robot_urdf,
 )
 from gimwatch.model.mjcf_model import is_mjcf
+from gimwatch.model.q_checks import UNIT_NORM_TOLERANCE, as_configuration, unit_blocks
 from gimwatch.model.robot_files import read_robot_file
 from gimwatch.model.sampling import (
     PLACEHOLDER_LIMIT,
     check_random_budget,
     placeholder_limit_joints,
     random_configurations,
-    unit_block_size,
 )
 
 __all__ = [
     "EXAMPLE_ROBOT_NOTES",
     "PLACEHOLDER_LIMIT",
+    "UNIT_NORM_TOLERANCE",
     "Robot",
+    "as_configuration",
     "captured_c_output",
     "chain_robot",
     "check_random_budget",
@@ -353,72 +354,3 @@ def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
 def neutral_configuration(robot: Robot) -> np.ndarray:
     """Pinocchio's neutral configuration (zero angles, identity quaternions)."""
     return pin.neutral(robot.model)
-
-
-#: |‖block‖ − 1| allowed for the unit blocks of a q given to the library functions.
-UNIT_NORM_TOLERANCE = 1e-6
-
-
-def unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-    """Where q's unit blocks end, their sizes and joints: computed once per robot, kept on it."""
-    blocks = robot.__dict__.get("_unit_blocks")
-    if blocks is None:
-        found = [
-            (joint.idx_q + joint.nq, unit_block_size(joint), name)
-            for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True)
-            if unit_block_size(joint)
-        ]
-        blocks = (
-            np.array([b[0] for b in found], dtype=np.int64),
-            np.array([b[1] for b in found], dtype=np.int64),
-            tuple(b[2] for b in found),
-        )
-        object.__setattr__(robot, "_unit_blocks", blocks)  # frozen: a cache, not state
-    return blocks
-
-
-def _unit_norms(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """The norm of every unit block of q, by one gather and one segmented sum (no joint loop)."""
-    gather = robot.__dict__.get("_unit_gather")
-    if gather is None:
-        stops, sizes, _ = unit_blocks(robot)
-        index = np.concatenate(
-            [np.arange(stop - size, stop) for stop, size in zip(stops, sizes, strict=True)]
-        )
-        gather = (index, np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp))
-        object.__setattr__(robot, "_unit_gather", gather)  # frozen: a cache, not state
-    index, offsets = gather
-    return np.sqrt(np.add.reduceat(q[index] ** 2, offsets))
-
-
-def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
-    """Check that ``q`` is a finite real vector of length nq and return it as an array.
-
-    Each unit block (a continuous joint's (cos θ, sin θ), a quaternion) must have norm 1
-    within `UNIT_NORM_TOLERANCE`: Pinocchio would use a zero block as is, freezing
-    the joint (a zero rotation matrix) and giving a wrong M(q).
-    """
-    try:
-        array = np.asarray(q)
-        if array.dtype.kind not in "biuf":
-            raise TypeError(f"{array.dtype.name} entries")
-        array = array.astype(float)
-    except (TypeError, ValueError) as exc:
-        raise InputError("q", "a vector of real numbers", str(exc)) from None
-    if array.shape != (robot.nq,):
-        raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
-    if not np.all(np.isfinite(array)):
-        raise InputError("q", "finite", array.tolist())
-    stops, sizes, names = unit_blocks(robot)
-    if stops.size:
-        norms = _unit_norms(robot, array)
-        bad = np.flatnonzero(~(np.abs(norms - 1.0) <= UNIT_NORM_TOLERANCE))
-        if bad.size:
-            k = int(bad[0])
-            what = "quaternion" if sizes[k] == 4 else "(cos θ, sin θ)"
-            raise InputError(
-                f"the {what} of joint {names[k]!r} in q",
-                f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
-                round(float(norms[k]), 9),
-            )
-    return array

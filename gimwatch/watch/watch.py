@@ -22,7 +22,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics.conditioning import extreme_ratio, ldlt_pivots
+from gimwatch.metrics.conditioning import ldlt_pivots
 from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.registry import METRICS, GimState
 from gimwatch.model.robots import (
@@ -39,7 +39,9 @@ from gimwatch.watch.alarm import (
     check_on_alarm,
     warn_alarm,
 )
+from gimwatch.watch.compiled_path import CompiledSampling
 from gimwatch.watch.series import WatchSeries
+from gimwatch.watch.series_views import SeriesViews
 from gimwatch.watch.sources import GivenMatrix, MujocoSource, robot_from_model, type_name
 
 __all__ = [
@@ -69,7 +71,7 @@ def _metric_names(metrics) -> tuple[str, ...]:
     return names
 
 
-class Watch:
+class Watch(CompiledSampling, SeriesViews):
     """Evaluates the requested metrics at samples and raises alarms, in any loop.
 
     Build it from what the loop has: ``Watch(robot, metrics)`` (a gimwatch
@@ -329,75 +331,6 @@ class Watch:
         self._checked = getattr(source, "trusted", True)
         return values
 
-    def _fast_values(self, source, q) -> list | None:
-        """The watched values by the compiled path, or None: then the checked path decides.
-
-        κ: one scaled eigen-solve (`scaled_spectrum`); a NaN or
-        non-positive λmin sends the sample to the checked path, which names the problem, so
-        the checks cost nothing on a good M. δ: one compiled call on the diagonal.
-        """
-        if not self._fast:
-            return None
-        try:
-            return self._compiled_values(source, q)
-        except np.linalg.LinAlgError:  # NaN in M reached LAPACK: the checked path says where
-            return None
-
-    def _compiled_values(self, source, q) -> list | None:
-        if self._only_kappa and self.nv > NUMPY_EIG_MIN_NV:  # NumPy's LAPACK is faster there
-            M = self._gim(source, q)
-            scale = self._kernels.spectrum_scale(M)
-            if not scale > 0.0:
-                return None
-            values = np.linalg.eigvalsh(M if scale == 1.0 else M * (1.0 / scale))
-            value = extreme_ratio(values)
-            return [value] if value >= 1.0 else None
-        if self._only_kappa:
-            value = self._kernels.spectrum_ratio(self._gim(source, q))
-            return [value] if value >= 1.0 else None  # NaN: the checked path names why
-        if self.full:
-            M = self._gim(source, q)
-            spectrum, scale = self._kernels.scaled_spectrum(M)
-            low = spectrum[0]
-            if not low > 0.0:
-                return None
-            out = []
-            for name in self._names:
-                if name == "kappa":
-                    out.append(spectrum[-1] / low)
-                elif name == "eigenvalues":
-                    out.append(spectrum * scale)
-                elif name == "diagonal":
-                    out.append(M.diagonal())
-                else:
-                    out.append(self._kernels.positive_ratio(M.diagonal()))
-            return out
-        lean = self.lean if source is self.dynamics else source
-        if self._names == ("diagonal_ratio",) and lean is not None:
-            value = lean.diagonal_ratio(q)
-            return [value] if 1.0 <= value < math.inf else None
-        diag = self._diagonal(lean, source, q)
-        delta = self._kernels.positive_ratio(diag)
-        if not delta >= 1.0:
-            return None
-        return [delta if name == "diagonal_ratio" else diag for name in self._names]
-
-    def _gim(self, source, q) -> np.ndarray:
-        if source is None:
-            return pin.crba(self.robot.model, self.data, q)
-        if isinstance(source, MujocoSource):
-            return source.gim(q, out=self._M)
-        return source.gim(q)
-
-    def _diagonal(self, lean, source, q) -> np.ndarray:
-        if lean is not None:
-            return lean.gim_diagonal(q)
-        if source is not None:
-            return source.gim_diagonal(q)
-        if self.nv <= CRBA_DIAGONAL_MAX_NV:  # C++ CRBA beats the O(n) map in Python here
-            return pin.crba(self.robot.model, self.data, q).diagonal()
-        return GimState(self.robot, self.data, q, False).diag
-
     def _record(self, t: float, values: list) -> Alarm | None:
         self._series.append(t, values)
         if self.alarm_metric is None:
@@ -423,77 +356,6 @@ class Watch:
         metric = self.metrics.get("scaled_diagonal_ratio")
         return None if metric is None else metric.estimator.alpha
 
-    @property
-    def times(self) -> np.ndarray:
-        """The sample times (s) so far (a read-only view)."""
-        return self._series.times
-
-    @property
-    def series(self) -> dict[str, np.ndarray]:
-        """Name -> the watched metric's values so far (read-only views; vector metrics 2-D)."""
-        return self._series.columns()
-
-    def array(self, name: str) -> np.ndarray:
-        """One series as an array: ``"t"`` (s) or a watched metric (vector metrics: 2-D)."""
-        if name == "t":
-            return self.times.copy()
-        if name not in self.metrics:
-            watched = list(self.metrics)
-            raise InputError("the series name", f"'t' or a watched metric {watched}", name)
-        return self.series[name].copy()
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The series as arrays, keyed ``watch_<metric>`` plus ``watch_t``."""
-        out = {"watch_t": self.times.copy()}
-        for name, values in self.series.items():
-            out[f"watch_{name}"] = values.copy()
-        tracked = self.metrics.get("kappa_tracked")
-        if tracked is not None and len(tracked.fallbacks) == len(out["watch_t"]):
-            out["watch_kappa_tracked_fallback"] = np.array(tracked.fallbacks, dtype=str)
-            out["watch_kappa_tracked_error_estimate"] = np.array(tracked.error_estimates)
-        return out
-
-    def to_dataframe(self):
-        """The series as a pandas DataFrame: ``t`` and one column per scalar metric.
-
-        Vector metrics (``eigenvalues``, ``diagonal``) are spread into ``<metric>:<k>``.
-        Needs pandas (``pip install 'gimwatch[pandas]'``).
-        """
-        from gimwatch.output.dataframe import watch_frame
-
-        return watch_frame(self.arrays())
-
-    def plot(self, metrics: tuple[str, ...] | None = None, *, ax=None):
-        """The watched scalar metrics over time on a log axis, with the alarm threshold.
-
-        For the own-loop case, the figure a results folder has for ``simulate``
-        (`gimwatch.output.figures.plot_watch`). Vector metrics (eigenvalues, diagonal)
-        are left out.
-
-        Args:
-            metrics: Which watched metrics (default: every scalar one).
-            ax: Matplotlib Axes to draw on (a new figure's when None).
-
-        Returns:
-            The Axes.
-        """
-        from gimwatch.output.figures import plot_watch
-
-        scalar = [name for name, metric in self.metrics.items() if not metric.vector]
-        chosen = scalar if metrics is None else list(metrics)
-        unknown = [n for n in chosen if n not in scalar]
-        if unknown or not chosen:
-            raise InputError("the metrics to plot", f"watched scalar metrics {scalar}", unknown)
-        threshold = None
-        if self.alarm_metric in chosen:  # drawn where the metric's value is its severity
-            severity = self.metrics[self.alarm_metric].severity
-            if severity(self.alarm_threshold) == self.alarm_threshold:
-                threshold = self.alarm_threshold
-        series = {name: self.array(name) for name in chosen}
-        return plot_watch(
-            self.array("t"), series, alarm_metric=self.alarm_metric, threshold=threshold, ax=ax
-        )
-
     def __repr__(self) -> str:
         """One line: the robot, the metrics, the samples taken and the alarm."""
         robot = self.robot.name if self.robot is not None else type(self.dynamics).__name__
@@ -506,15 +368,6 @@ class Watch:
             f"Watch(robot={robot!r}, metrics={list(self.metrics)}, samples={len(self.times)}, "
             f"alarms={len(self.alarms)}{alarm})"
         )
-
-
-#: Above this nv a κ-only watch solves with NumPy's ``eigvalsh`` (after the compiled scale
-#: check): its LAPACK build beats the one numba calls there, and its wrapper's µs no longer count.
-NUMPY_EIG_MIN_NV = 24
-
-#: Up to this nv, δ of a ``pinocchio.Model`` without URDF reads CRBA's diagonal (C++, O(n²))
-#: rather than the O(n) centroidal map, whose Python around Pinocchio costs more.
-CRBA_DIAGONAL_MAX_NV = 40
 
 
 def _time(t) -> float:
