@@ -125,10 +125,7 @@ class ConfigurationState:
             self._index,
             self._geometry,
             False,
-            self._rot,
-            self._vec,
-            self._block,
-            self._six,
+            *self._workspace()[:4],  # rot, vec, block, six
             out,
         )
         return out
@@ -137,14 +134,7 @@ class ConfigurationState:
         """M(q) x: Newton–Euler from rest without gravity, O(n)."""
         out = np.empty(self.model.nv)
         fused.gim_product(
-            np.ascontiguousarray(x, dtype=float),
-            self._index,
-            False,
-            self._rot,
-            self._vec,
-            self._block,
-            self._six,
-            out,
+            np.ascontiguousarray(x, dtype=float), self._index, False, *self._workspace()[:4], out
         )
         return out
 
