@@ -125,7 +125,10 @@ class ConfigurationState:
             self._index,
             self._geometry,
             False,
-            *self._workspace()[:4],  # rot, vec, block, six
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
             out,
         )
         return out
@@ -134,7 +137,14 @@ class ConfigurationState:
         """M(q) x: Newton–Euler from rest without gravity, O(n)."""
         out = np.empty(self.model.nv)
         fused.gim_product(
-            np.ascontiguousarray(x, dtype=float), self._index, False, *self._workspace()[:4], out
+            np.ascontiguousarray(x, dtype=float),
+            self._index,
+            False,
+            self._rot,
+            self._vec,
+            self._block,
+            self._six,
+            out,
         )
         return out
 
