@@ -253,13 +253,19 @@ def test_a_small_survey_has_no_empty_legend_entry():
 
 def test_every_grid_panel_has_tick_labels_and_no_label_is_clipped():
     survey = _survey(3)
-    narrow = np.linspace(2.0, 3.0, 30)  # less than a decade on both axes
+    narrow = np.linspace(95.0, 110.0, 30)  # far less than a decade on both axes
     survey.robots[1].metrics = {"diagonal_ratio": narrow, "kappa": 2.5 * narrow}
     fig = Figure(figsize=survey_plots.grid_figsize(3))
     survey_plots.plot_kappa_vs_delta_grid(survey, fig=fig)
     _drawn(fig)
+    renderer = fig.canvas.get_renderer()
     for ax in [a for a in fig.axes if a.axison]:
         assert _visible_labels(ax, "x") and _visible_labels(ax, "y"), ax.get_title()
+        for labels in (ax.get_xticklabels(which="both"), ax.get_yticklabels(which="both")):
+            boxes = [x.get_window_extent(renderer) for x in labels if x.get_text()]
+            boxes = [b for b in boxes if b.width > 0]
+            overlapping = [(a, b) for k, a in enumerate(boxes) for b in boxes[k + 1 :]]
+            assert not [pair for pair in overlapping if pair[0].overlaps(pair[1])], ax.get_title()
     for label in (fig._supxlabel, fig._supylabel, fig._suptitle):
         assert _inside(fig, label), label.get_text()
         assert label.get_window_extent().y1 <= fig.bbox.y1 + 1, label.get_text()

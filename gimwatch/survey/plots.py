@@ -123,7 +123,13 @@ def plot_kappa_vs_delta(result: SurveyResult, ax=None):
 
 def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
     """One log-log panel per robot: κ against δ, with the calibrated line κ = αδ."""
-    from matplotlib.ticker import LogLocator, NullFormatter
+    from matplotlib.ticker import (
+        FormatStrFormatter,
+        LogLocator,
+        MaxNLocator,
+        NullFormatter,
+        NullLocator,
+    )
 
     count = max(len(result.robots), 1)
     columns = min(6, count)
@@ -141,14 +147,17 @@ def plot_kappa_vs_delta_grid(result: SurveyResult, fig=None):
         if math.isfinite(robot.alpha):
             ax.plot(line, robot.alpha * line, "k--", linewidth=0.7)
         ax.set(xscale="log", yscale="log")
-        for axis, values in ((ax.xaxis, delta), (ax.yaxis, robot.metrics["kappa"])):
-            finite = np.asarray(values)[np.isfinite(values) & (np.asarray(values) > 0)]
-            if finite.size and np.ptp(np.log10(finite)) >= 1.0:  # spans a decade or more
+        ax.autoscale_view()
+        for axis in (ax.xaxis, ax.yaxis):
+            low, high = axis.get_view_interval()
+            if np.log10(high) - np.log10(low) >= 1.0:  # a decade or more in view
                 # at most three labelled decades: no colliding ticks
                 axis.set_major_locator(LogLocator(numticks=3))
                 axis.set_minor_formatter(NullFormatter())
-            # less than a decade: matplotlib's default labels the minor ticks, so that no
-            # panel is left without numbers
+            else:  # within a decade: three plain numbers, so that no panel is left without
+                axis.set_major_locator(MaxNLocator(nbins=3))
+                axis.set_major_formatter(FormatStrFormatter("%.3g"))
+                axis.set_minor_locator(NullLocator())
         ax.set_title(f"{robot.name} (r = {_format(robot.pearson_log)})", fontsize=7)
         ax.tick_params(which="both", labelsize=6)
     for ax in axes.flat[len(result.robots) :]:
