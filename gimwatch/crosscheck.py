@@ -35,6 +35,7 @@ from gimwatch.denoc import DenocModel
 from gimwatch.denoc.tree import FREE_FLYER_NAME
 from gimwatch.errors import InputError, URDFError
 from gimwatch.metrics.conditioning import extreme_ratio, warn_if_ill_conditioned
+from gimwatch.model.denoc_input import instantaneous_urdf
 from gimwatch.model.robots import (
     EXAMPLE_ROBOT_NOTES,
     Robot,
@@ -121,6 +122,13 @@ def denoc_model(robot: Robot) -> DenocModel:
     )
 
 
+def _denoc_at(robot: Robot, q: np.ndarray) -> tuple[DenocModel, np.ndarray]:
+    """DeNOC's model of an MJCF tree with balls or several trees at ``q``, and its q."""
+    instant = instantaneous_urdf(robot.model, q)
+    model = DenocModel.from_urdf(instant.urdf, source=robot.source, joint_order=instant.joint_order)
+    return model, instant.q
+
+
 def check_tolerance(tolerance: float, name: str = "tolerance") -> float:
     """A relative tolerance must be a number in (0, 1): inf or 1 would pass every error."""
     if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float, np.floating)):
@@ -189,9 +197,11 @@ def crosscheck_robot(
 
     M(q) is called singular only when it is numerically rank-deficient:
     λ_min(M) <= nv·ε·λ_max(M). Otherwise q̈ is compared within max(tolerance, κ·ε).
-    A robot without DeNOC input (an MJCF model with a ball joint or several floating trees,
-    see `gimwatch.model.mjcf_robot.urdf_of_model`) is compared with MuJoCo only
-    (``peer`` is forced to ``"mujoco"``) and its DeNOC errors are None.
+    An MJCF model with a ball joint or several floating trees (no URDF DeNOC reads whole) is
+    read by DeNOC at each sample with its balls and free joints replaced by one-DoF joints of
+    the same motion at that configuration (`gimwatch.model.denoc_input.instantaneous_urdf`):
+    M, its diagonal and pivots are compared as for any robot, τ and q̈ at v = 0 (the
+    stand-ins' velocity-product terms differ), and ``peer`` defaults to ``"mujoco"``.
 
     Args:
         robot: The robot (fixed or floating base, as loaded).
@@ -212,9 +222,11 @@ def crosscheck_robot(
         model = full_model.copy()
         model.armature = np.zeros(model.nv)
         data = model.createData()
-    use_denoc = bool(robot.urdf_xml)
+    # An MJCF tree DeNOC cannot read whole is read one configuration at a time.
+    per_sample = not robot.urdf_xml and bool(robot.mujoco_joints)
+    use_denoc = bool(robot.urdf_xml) or per_sample
     peer = "mujoco" if not use_denoc or (robot.mujoco_joints and peer is None) else peer
-    dm = denoc_model(robot) if use_denoc else None
+    dm = denoc_model(robot) if robot.urdf_xml else None
     mj_model, refusal = None, ""
     if peer == "mujoco":
         from gimwatch.model.mujoco_model import MujocoRefusal, compile_robot
@@ -230,6 +242,10 @@ def crosscheck_robot(
     kappa_max, conditioned_ok, singular_note, largest_entry = 0.0, True, "", 0.0
     for q in random_configurations(robot, samples, seed=seed):
         v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
+        q_denoc = q
+        if per_sample:
+            dm, q_denoc = _denoc_at(robot, q)
+            v = np.zeros(robot.nv)
         upper = np.triu(pin.crba(model, data, q))
         M_ref = _finite(robot, "mass matrix M(q)", upper + np.triu(upper, 1).T)
         largest_entry = max(largest_entry, float(np.abs(M_ref).max(initial=0.0)))
@@ -254,13 +270,15 @@ def crosscheck_robot(
             )
         if dm is None:
             continue
-        errors["gim"] = _worst(errors["gim"], _relative(dm.gim(q), M_ref))
-        errors["diag"] = _worst(errors["diag"], _relative(dm.gim_diagonal(q), np.diag(M_ref)))
+        errors["gim"] = _worst(errors["gim"], _relative(dm.gim(q_denoc), M_ref))
+        diagonal = dm.gim_diagonal(q_denoc)
+        errors["diag"] = _worst(errors["diag"], _relative(diagonal, np.diag(M_ref)))
         tau_ref = np.array(pin.rnea(model, data, q, v, a))
-        errors["tau"] = _worst(errors["tau"], _relative(dm.inverse_dynamics(q, v, a), tau_ref))
+        tau_denoc = dm.inverse_dynamics(q_denoc, v, a)
+        errors["tau"] = _worst(errors["tau"], _relative(tau_denoc, tau_ref))
         pin.crba(model, data, q)
         pin.cholesky.decompose(model, data)
-        pivots = dm.forward_dynamics_pivots(q)
+        pivots = dm.forward_dynamics_pivots(q_denoc)
         if rank_deficient:
             pivot_error, _ = _pivot_error(pivots, np.array(data.D))
             errors["pivots"] = _worst(errors["pivots"], pivot_error)
@@ -271,7 +289,7 @@ def crosscheck_robot(
         allowed = max(tolerance, float(kappa) * _EPS)
         conditioned_ok &= pivot_error <= allowed
         qdd_ref = np.array(pin.aba(model, data, q, v, tau))
-        qdd = dm.forward_dynamics(q, v, tau)
+        qdd = dm.forward_dynamics(q_denoc, v, tau)
         qdd_error = _relative(qdd, qdd_ref)
         conditioned_ok &= qdd_error <= allowed
         errors["qdd"] = _worst(errors["qdd"], qdd_error)
@@ -286,12 +304,12 @@ def crosscheck_robot(
             f"not compared: M(q) ≡ 0 at all {samples} samples (no link beyond a moving joint "
             "has mass: give the links <inertial> elements)"
         )
-    if not use_denoc:
+    if per_sample:
         notes.append(
-            "DeNOC reads hinges and slides on one tree with at most one free joint at its "
-            "root (this model has a ball joint or several floating trees): Pinocchio's M is "
-            "compared with MuJoCo's"
+            "DeNOC read each sample with the ball and free joints as one-DoF joints of the "
+            "same motion at that configuration: τ and q̈ compared at v = 0"
         )
+    if not use_denoc:
         for key in ("gim", "diag", "tau", "qdd", "backward", "pivots"):
             errors[key] = None
     elif singular_note:

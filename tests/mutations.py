@@ -160,6 +160,22 @@ MUTANTS = (
         DENOC + LONG,
         "the one-angle-per-body state reads a continuous joint's angle as (cos θ, sin θ)",
     ),
+    Mutant(
+        "denoc-ball-stand-in-quaternion-order",
+        "gimwatch/model/denoc_input.py",
+        "x, y, z, w = coordinates",
+        "w, x, y, z = coordinates",
+        ("tests/test_mjcf_compiled.py",),
+        "DeNOC's stand-ins for a ball joint read Pinocchio's (x, y, z, w) as (w, x, y, z)",
+    ),
+    Mutant(
+        "denoc-free-stand-in-angular-first",
+        "gimwatch/model/denoc_input.py",
+        '    ("tz", "prismatic", 2),\n    *_BALL_PARTS,\n)',
+        '    *_BALL_PARTS,\n    ("tz", "prismatic", 2),\n)',
+        ("tests/test_mjcf_compiled.py",),
+        "a free object's stand-ins turn before their last slide (velocity order wrong)",
+    ),
     # --- mpmath references ---
     Mutant(
         "planar-reference-30-digits",

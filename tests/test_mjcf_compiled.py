@@ -10,7 +10,9 @@ import pinocchio as pin
 import pytest
 
 from gimwatch.crosscheck import crosscheck_robot, denoc_model
+from gimwatch.denoc import DenocModel
 from gimwatch.errors import URDFWarning
+from gimwatch.model.denoc_input import instantaneous_urdf
 from gimwatch.model.mjcf_coordinates import q_from_qpos, qpos_from_q
 from gimwatch.model.robots import load_robot, random_configurations
 
@@ -45,6 +47,13 @@ def _crba(robot, q):
     return upper + np.triu(upper, 1).T
 
 
+def _denoc_gim(robot, q):
+    if robot.urdf_xml:
+        return denoc_model(robot).gim(q)
+    instant = instantaneous_urdf(robot.model, q)
+    return DenocModel.from_urdf(instant.urdf, joint_order=instant.joint_order).gim(instant.q)
+
+
 def _load(path, **kwargs):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", URDFWarning)
@@ -67,11 +76,12 @@ def test_m_equals_mj_fullm_entry_by_entry_in_mujoco_order(path):
         np.testing.assert_allclose(
             _crba(robot, q), reference, rtol=0, atol=1e-12 * np.abs(reference).max()
         )
-        if robot.urdf_xml:  # DeNOC reads the URDF text written from the compiled tree
-            rigid = reference - np.diag(np.asarray(mj_model.dof_armature))
-            np.testing.assert_allclose(
-                denoc_model(robot).gim(q), rigid, rtol=0, atol=1e-12 * np.abs(rigid).max()
-            )
+        # DeNOC reads the URDF text written from the compiled tree, or with balls and free
+        # objects the stand-ins at q
+        rigid = reference - np.diag(np.asarray(mj_model.dof_armature))
+        np.testing.assert_allclose(
+            _denoc_gim(robot, q), rigid, rtol=0, atol=1e-12 * np.abs(rigid).max()
+        )
 
 
 def test_armature_switch_leaves_dof_armature_out():
@@ -126,8 +136,9 @@ def test_crosscheck_compares_denoc_pinocchio_and_mujoco(path):
     result = crosscheck_robot(robot, samples=2, seed=3)
     assert result.passed, result
     assert result.mujoco_gim_rel_err < 1e-13
-    if robot.urdf_xml:
-        assert result.gim_rel_err < 1e-13 and result.qdd_rel_err is not None
+    assert result.gim_rel_err < 1e-13 and result.qdd_rel_err is not None
+    assert result.tau_rel_err < 1e-12 and result.pivots_rel_err < 1e-12
+    assert ("v = 0" in result.note) == (not robot.urdf_xml)
 
 
 @pytest.mark.parametrize("stem", ["humanoid", "hopper"])

@@ -22,10 +22,11 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import URDFError, URDFWarning
+from gimwatch.model.denoc_input import urdf_of_model
 from gimwatch.model.mjcf_compiled import build_pinocchio_model, compile_mjcf, subtree_joints
 from gimwatch.model.urdf_text import max_links
 
-__all__ = ["MAX_BODY_DEPTH", "MAX_MJCF_BYTES", "check_mjcf_budget", "read_mjcf", "urdf_of_model"]
+__all__ = ["MAX_BODY_DEPTH", "MAX_MJCF_BYTES", "check_mjcf_budget", "read_mjcf"]
 
 #: The largest MJCF text read, included files counted (as a URDF file: 64 MiB).
 MAX_MJCF_BYTES = 64 * 1024 * 1024
@@ -188,78 +189,3 @@ def _set_limits(model: pin.Model, mj_model, joint_ids) -> None:
         if mj_model.jnt_limited[j] and joint.nq == 1:
             lower[joint.idx_q], upper[joint.idx_q] = mj_model.jnt_range[j]
     model.lowerPositionLimit, model.upperPositionLimit = lower, upper
-
-
-_INERTIA_ENTRIES = {
-    "ixx": (0, 0),
-    "ixy": (0, 1),
-    "ixz": (0, 2),
-    "iyy": (1, 1),
-    "iyz": (1, 2),
-    "izz": (2, 2),
-}
-
-
-def _xyz(vector) -> str:
-    return " ".join(repr(float(x)) for x in vector)
-
-
-def urdf_of_model(model: pin.Model) -> str:
-    """URDF text of a Pinocchio model for DeNOC, or "" when DeNOC cannot read the tree.
-
-    DeNOC reads revolute and prismatic joints on one tree (any number of branches on a fixed
-    base), and a floating base only as the one free joint, at the root; ball joints and
-    several floating trees are left to Pinocchio and MuJoCo.
-    Each joint's placement becomes its ``<origin>``, each joint's inertia its link's
-    ``<inertial>`` (about the centre of mass, in the joint frame).
-    """
-    kinds = [joint.shortname() for joint in model.joints[1:]]
-    free = [k for k, kind in enumerate(kinds) if "FreeFlyer" in kind]
-    roots = [k for k in range(1, model.njoints) if model.parents[k] == 0]
-    if any("Spherical" in kind for kind in kinds) or free not in ([], [0]):
-        return ""
-    if free and roots != [1]:  # a free object beside a floating robot: two trees
-        return ""
-    lines = ['<robot name="mjcf">', '<link name="base_link"/>']
-    start = 2 if free else 1
-    names = {0: "base_link", 1: "base_link"} if free else {0: "base_link"}
-    for k in range(1, model.njoints):
-        inertia = model.inertias[k]
-        link = names[k] if k < start else f"link_{k}"
-        names[k] = link
-        if k >= start:
-            lines.append(f'<link name="{link}">')
-        else:
-            lines[1] = f'<link name="{link}">'
-        I = inertia.inertia
-        moments = " ".join(
-            f'{key}="{float(I[r, c])!r}"' for key, (r, c) in _INERTIA_ENTRIES.items()
-        )
-        lines.append(
-            f'<inertial><origin xyz="{_xyz(inertia.lever)}"/>'
-            f'<mass value="{float(inertia.mass)!r}"/><inertia {moments}/></inertial></link>'
-        )
-        if k < start:
-            continue
-        joint, placement = model.joints[k], model.jointPlacements[k]
-        kind = joint.shortname()
-        axis = _joint_axis(kind, joint)
-        urdf_kind = "revolute" if kind.startswith("JointModelR") else "prismatic"
-        lines.append(
-            f'<joint name="{model.names[k]}" type="{urdf_kind}">'
-            f'<parent link="{names[model.parents[k]]}"/><child link="{link}"/>'
-            f'<origin xyz="{_xyz(placement.translation)}" '
-            f'rpy="{_xyz(pin.rpy.matrixToRpy(placement.rotation))}"/>'
-            f'<axis xyz="{_xyz(axis)}"/>'
-            f'<limit lower="{float(model.lowerPositionLimit[joint.idx_q])!r}" '
-            f'upper="{float(model.upperPositionLimit[joint.idx_q])!r}" effort="0" velocity="0"/>'
-            "</joint>"
-        )
-    lines.append("</robot>")
-    return "\n".join(lines)
-
-
-def _joint_axis(kind: str, joint) -> np.ndarray:
-    if kind[-1] in "XYZ" and "Unaligned" not in kind:
-        return np.eye(3)["XYZ".index(kind[-1])]
-    return np.array(joint.extract().axis, dtype=float)
