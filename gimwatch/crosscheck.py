@@ -32,9 +32,9 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.denoc import DenocModel
-from gimwatch.denoc.tree import FREE_FLYER_NAME
 from gimwatch.errors import InputError, URDFError
 from gimwatch.metrics.conditioning import extreme_ratio, warn_if_ill_conditioned
+from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.model.denoc_input import instantaneous_urdf
 from gimwatch.model.robots import (
     EXAMPLE_ROBOT_NOTES,
@@ -108,18 +108,6 @@ class CrossCheckResult:
     def to_dict(self) -> dict:
         """The record as a plain dict (for JSON)."""
         return asdict(self)
-
-
-def denoc_model(robot: Robot) -> DenocModel:
-    """The DeNOC model of a gimwatch robot, its coordinates in Pinocchio's order."""
-    # An MJCF file may float its root itself (a free joint named as in the file).
-    floating = "FreeFlyer" in robot.model.joints[1].shortname()
-    order = list(robot.joint_names)
-    if floating:
-        order[0] = FREE_FLYER_NAME
-    return DenocModel.from_urdf(
-        robot.urdf_xml, floating=floating, source=robot.source, joint_order=order
-    )
 
 
 def _denoc_at(robot: Robot, q: np.ndarray) -> tuple[DenocModel, np.ndarray]:
@@ -226,7 +214,7 @@ def crosscheck_robot(
     per_sample = not robot.urdf_xml and bool(robot.mujoco_joints)
     use_denoc = bool(robot.urdf_xml) or per_sample
     peer = "mujoco" if not use_denoc or (robot.mujoco_joints and peer is None) else peer
-    dm = denoc_model(robot) if robot.urdf_xml else None
+    dm = denoc_model(robot, parse=True) if robot.urdf_xml else None
     mj_model, refusal = None, ""
     if peer == "mujoco":
         from gimwatch.model.mujoco_model import MujocoRefusal, compile_robot
@@ -334,7 +322,7 @@ def crosscheck_robot(
     )
     return CrossCheckResult(
         robot=robot.name,
-        floating=robot.floating or "FreeFlyer" in model.joints[1].shortname(),
+        floating=robot.free_base,
         nv=robot.nv,
         samples=samples,
         gim_rel_err=errors["gim"],

@@ -202,3 +202,31 @@ def test_simulate_and_survey_run_on_mjcf(stem, tmp_path, capsys):
         path = str(FEATURES / f"{stem}.xml")
         assert main(["survey", path, "--samples", "3", "-o", str(tmp_path / "survey")]) == 0
     assert f"{robot.nv}" in (tmp_path / "survey" / "report.md").read_text()
+
+
+def test_a_files_own_free_joint_is_a_floating_base_for_denoc_and_the_tracker():
+    """floating_arm.xml floats on its own free joint: DeNOC's free-flyer, κ tracked by it."""
+    from gimwatch.simulation.backends import DenocBackend
+    from gimwatch.watch import Watch
+
+    robot = _load(FEATURES / "floating_arm.xml")
+    assert robot.free_base and not robot.floating and robot.joint_names[0] == "float"
+    assert "base='floating'" in repr(robot)
+    backend = DenocBackend(robot, np.array(robot.model.gravity.linear))
+    watch = Watch(robot, ("kappa_tracked",))
+    rng = np.random.default_rng(4)
+    for t, q in enumerate(random_configurations(robot, 3, seed=5)):
+        v, tau = rng.standard_normal(robot.nv), rng.standard_normal(robot.nv)
+        reference = pin.aba(robot.model, robot.model.createData(), q, v, tau)
+        np.testing.assert_allclose(backend.forward_dynamics(q, v, tau), reference, atol=1e-11)
+        eigenvalues = np.linalg.eigvalsh(_crba(robot, q))
+        watch.sample(float(t), q)
+        kappa = watch.arrays()["watch_kappa_tracked"][-1]
+        assert kappa == pytest.approx(eigenvalues[-1] / eigenvalues[0], rel=1e-9)
+
+
+def test_analyze_says_floating_for_a_files_own_free_joint(capsys):
+    from gimwatch.cli import main
+
+    assert main(["analyze", str(FEATURES / "floating_arm.xml")]) == 0
+    assert "nv = 8, floating base" in capsys.readouterr().out

@@ -45,7 +45,7 @@ def robot_rows() -> list[dict]:
                     continue
                 row.update(
                     nv=robot.nv,
-                    base="floating" if robot.floating else "fixed",
+                    base="floating" if robot.free_base else "fixed",
                     source=robot.source,
                     problem="" if floating is None else "no joint with a fixed base",
                 )

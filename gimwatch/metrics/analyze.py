@@ -181,6 +181,7 @@ def analyze(
         results = [analyze_configuration(robot, np.asarray(x), data=data) for x in qs]
         if random is not None:
             placeholders = placeholder_limit_joints(robot)
+        floating = robot.free_base  # an MJCF file may float its robot itself
     return Analysis(
         results=tuple(results),
         path=path,

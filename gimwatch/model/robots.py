@@ -120,11 +120,25 @@ class Robot:
         object.__setattr__(self, "dof_names", tuple(names))
 
     def __repr__(self) -> str:  # the model and the URDF text would fill a screen
-        base = "floating" if self.floating else "fixed"
+        base = "floating" if self.free_base else "fixed"
         return (
             f"Robot(name={self.name!r}, spec={self.spec!r}, nq={self.nq}, nv={self.nv}, "
             f"base={base!r}, source={self.source!r})"
         )
+
+    @property
+    def free_base(self) -> bool:
+        """Whether the whole tree moves on one free joint at its root.
+
+        The free-flyer gimwatch added (`floating`) or, in an MJCF file, the file's own free
+        joint when no other tree hangs from the world.
+        """
+        model = self.model
+        if self.floating:
+            return True
+        if model.njoints < 2 or "FreeFlyer" not in model.joints[1].shortname():
+            return False
+        return all(model.parents[k] != 0 for k in range(2, model.njoints))
 
     @property
     def nq(self) -> int:

@@ -117,14 +117,9 @@ class DenocBackend(Backend):
 
     def __init__(self, robot: Robot, gravity: np.ndarray | None) -> None:
         super().__init__(robot, gravity)
-        from gimwatch.denoc import DenocModel
+        from gimwatch.metrics.denoc_robot import denoc_model
 
-        if robot.chain is not None and not robot.floating:
-            self.denoc = DenocModel.from_chain(robot.chain)  # no URDF parsing for chain:N
-        else:
-            self.denoc = DenocModel.from_urdf(
-                robot.urdf_xml, floating=robot.floating, joint_order=robot.joint_names
-            )
+        self.denoc = denoc_model(robot)
         self._g = tuple(float(x) for x in self.gravity)
         self.lean = self.denoc.lean()  # one compiled call per evaluation, buffers kept
 
@@ -143,7 +138,7 @@ class DenocBackend(Backend):
         return self.lean.gim_diagonal(np.asarray(q, dtype=float))
 
     def energy(self, q, v):
-        if self.robot.floating:
+        if self.robot.free_base:
             return super().energy(q, v)
         return self.denoc.energy(q, v, gravity=self._g)
 

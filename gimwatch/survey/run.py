@@ -186,7 +186,7 @@ def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> Robot
         name=robot.name,
         spec=robot.spec,
         nv=robot.nv,
-        floating=robot.floating,
+        floating=robot.free_base,  # an MJCF file may float its robot itself
         note=note,
         dof_names=robot.dof_names,
         sample_index=index,

@@ -128,7 +128,7 @@ def trajectory_scene(robot: Robot, q0: np.ndarray, settings: TrajectorySettings)
         integrator = {"method": "RK4", "dt": settings.dt_s}
     table = {
         "robot": robot.spec,
-        "base": "floating" if robot.floating else "fixed",
+        "base": "floating" if robot.free_base else "fixed",
         "q": [float(x) for x in q0],
         "duration": settings.duration_s,
         "sample": settings.sample_s,

@@ -35,14 +35,10 @@ def lean_model(robot: Robot, dynamics=None):
     lean = getattr(dynamics, "lean", None)
     if lean is not None:
         return lean
-    from gimwatch.denoc import DenocModel
+    from gimwatch.metrics.denoc_robot import denoc_model
 
     try:
-        if robot.chain is not None and not robot.floating:
-            return DenocModel.from_chain(robot.chain).lean()  # no URDF parsing for chain:N
-        return DenocModel.from_urdf(
-            robot.urdf_xml, floating=robot.floating, joint_order=robot.joint_names
-        ).lean()
+        return denoc_model(robot).lean()
     except GimwatchError:  # a joint type DeNOC does not read
         return None
 

@@ -1,0 +1,30 @@
+"""DeNOC's model of a gimwatch robot, its coordinates in Pinocchio's order."""
+
+from __future__ import annotations
+
+from gimwatch.denoc import DenocModel
+from gimwatch.denoc.tree import FREE_FLYER_NAME
+from gimwatch.model.robots import Robot
+
+__all__ = ["denoc_model"]
+
+
+def denoc_model(robot: Robot, *, parse: bool = False) -> DenocModel:
+    """DeNOC's model of ``robot`` (fixed or floating base, as loaded).
+
+    A generated fixed-base chain is built from its spec unless ``parse`` (then, as for every
+    other robot, from its URDF text through yourdfpy). A free joint at the root of the whole
+    tree, gimwatch's or an MJCF file's own, is DeNOC's free-flyer.
+
+    Raises:
+        URDFError: DeNOC cannot read the robot's URDF (a joint type it lacks; an MJCF model
+            with ball joints or several trees has no URDF text).
+    """
+    if robot.chain is not None and not robot.floating and not parse:
+        return DenocModel.from_chain(robot.chain)  # no URDF parsing for chain:N
+    order = list(robot.joint_names)
+    if robot.free_base:
+        order[0] = FREE_FLYER_NAME  # an MJCF file names its own free joint
+    return DenocModel.from_urdf(
+        robot.urdf_xml, floating=robot.free_base, source=robot.source, joint_order=order
+    )
