@@ -230,3 +230,30 @@ def test_analyze_says_floating_for_a_files_own_free_joint(capsys):
 
     assert main(["analyze", str(FEATURES / "floating_arm.xml")]) == 0
     assert "nv = 8, floating base" in capsys.readouterr().out
+
+
+def test_a_scene_selects_one_tree_with_body_and_leaves_armature_out(tmp_path, capsys):
+    from gimwatch.cli import main
+
+    scene = tmp_path / "scene.toml"
+    scene.write_text(
+        f'robot = "{FEATURES / "humanoid.xml"}"\nbody = "torso"\narmature = false\n'
+        'duration = 0.02\nsample = 0.01\n[watch]\nmetrics = ["kappa"]\n'
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", URDFWarning)
+        assert main(["simulate", str(scene), "-o", str(tmp_path / "run")]) == 0
+    q = np.load(tmp_path / "run" / "trajectory.npz")["q"]
+    reference = _load(FEATURES / "humanoid.xml", body="torso", armature=False)
+    assert q.shape[1] == reference.nq and reference.nv == 18  # box_free left out
+    M = _crba(reference, q[0])
+    eigenvalues = np.linalg.eigvalsh(M)
+    kappa = np.load(tmp_path / "run" / "trajectory.npz")["watch_kappa"][0]
+    assert kappa == pytest.approx(eigenvalues[-1] / eigenvalues[0], rel=1e-10)
+    capsys.readouterr()
+    scene.write_text(scene.read_text().replace('"torso"', '"no_such_body"'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", URDFWarning)
+        assert main(["simulate", str(scene), "-o", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "no_such_body" in err and "body" in err and len(err.splitlines()) == 1, err

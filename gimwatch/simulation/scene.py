@@ -87,6 +87,8 @@ EFFECT_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 _TOP_KEYS = {
     "robot",
     "base",
+    "body",
+    "armature",
     "q",
     "v",
     "duration",
@@ -120,6 +122,8 @@ class RobotSpec:
     spec: str
     floating: bool | None = None  # None: no ``base`` key, the robot's default base
     chain: dict[str, Any] | None = None
+    body: str = ""  # MJCF: the subtree of this body ("" the whole model)
+    armature: bool = True  # MJCF: MuJoCo's dof_armature in M, as MuJoCo has it
 
 
 @dataclass(frozen=True)
@@ -174,6 +178,9 @@ def _robot(reader: TableReader, base_dir: Path | None) -> RobotSpec:
         raise reader.fail("robot", "is required")
     value = reader.table["robot"]
     if isinstance(value, dict):
+        for key in ("body", "armature"):
+            if key in reader.table:
+                raise reader.fail(key, "is for an MJCF robot, not a chain table")
         chain = reader.sub("robot")
         chain.check_keys(
             {"n", "mass_kg", "length_m", "radius_m", "axes", "joint_types"}, required=("n",)
@@ -192,7 +199,11 @@ def _robot(reader: TableReader, base_dir: Path | None) -> RobotSpec:
     if base_dir is not None and _is_path(value, base_dir):
         path = Path(value)
         value = str(path if path.is_absolute() else base_dir / path)
-    return RobotSpec(spec=value, floating=floating)
+    body = reader.string("body", "")
+    armature = reader.table.get("armature", True)
+    if not isinstance(armature, bool):
+        raise reader.fail("armature", f"must be true or false, got {armature!r}")
+    return RobotSpec(spec=value, floating=floating, body=body, armature=armature)
 
 
 def _is_path(value: str, base_dir: Path) -> bool:

@@ -47,14 +47,17 @@ def load_scene_robot(scene) -> Robot:
     try:
         if scene.robot.chain is not None:
             return _chain_robot(scene.robot.chain, bool(scene.robot.floating))
-        floating = scene.robot.floating
+        floating, mjcf = scene.robot.floating, {}
+        if scene.robot.body or not scene.robot.armature:
+            mjcf = {"body": scene.robot.body, "armature": scene.robot.armature}
         return load_robot(
-            scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None
+            scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None, **mjcf
         )
     except SceneError:
         raise
     except GimwatchError as exc:
-        raise scene.error("robot", str(exc)) from exc
+        key = "body" if scene.robot.body and "--body" in str(exc) else "robot"
+        raise scene.error(key, str(exc)) from exc
 
 
 def initial_state(scene, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
