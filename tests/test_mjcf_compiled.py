@@ -66,8 +66,9 @@ def test_m_equals_mj_fullm_entry_by_entry_in_mujoco_order(path):
     mj_model = mujoco.MjModel.from_xml_path(str(path))
     assert robot.nv == mj_model.nv and robot.nq == mj_model.nq
     names = [
-        mujoco.mj_id2name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(mj_model.njnt)
-    ]
+        mujoco.mj_id2name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
+        for j in range(mj_model.njnt)
+    ]  # an unnamed joint is joint<id> (unnamed_joints.xml)
     assert robot.joint_names == tuple(names)
     for q in random_configurations(robot, 4, seed=11):
         qpos = qpos_from_q(robot.model, q)
@@ -257,3 +258,24 @@ def test_a_scene_selects_one_tree_with_body_and_leaves_armature_out(tmp_path, ca
         assert main(["simulate", str(scene), "-o", str(tmp_path / "bad")]) == 2
     err = capsys.readouterr().err.strip()
     assert "no_such_body" in err and "body" in err and len(err.splitlines()) == 1, err
+
+
+def test_unnamed_joints_map_between_mujoco_and_the_robot():
+    """Watch.from_mujoco(robot=...) finds MuJoCo's unnamed joints by their joint<id> names."""
+    from gimwatch.watch import Watch
+
+    path = FEATURES / "unnamed_joints.xml"
+    robot = _load(path)
+    assert robot.joint_names == ("joint0", "joint1", "named")
+    mj_model = mujoco.MjModel.from_xml_path(str(path))
+    mj_data = mujoco.MjData(mj_model)
+    mj_data.qpos[:] = [0.3, -0.2, 0.1]
+    mujoco.mj_forward(mj_model, mj_data)
+    M = np.zeros((mj_model.nv, mj_model.nv))
+    mujoco.mj_fullM(mj_model, mj_data, M)
+    eigenvalues = np.linalg.eigvalsh(M)
+    watch = Watch.from_mujoco(mj_model, mj_data, ("kappa",), robot=robot)
+    watch.sample(0.0)
+    kappa = watch.arrays()["watch_kappa"][0]
+    assert kappa == pytest.approx(eigenvalues[-1] / eigenvalues[0], rel=1e-12)
+    assert crosscheck_robot(robot, samples=2, peer="mujoco").mujoco_gim_rel_err < 1e-13

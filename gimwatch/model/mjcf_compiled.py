@@ -141,6 +141,18 @@ def joint_name(mj_model, j: int) -> str:
     return mujoco.mj_id2name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) or f"joint{j}"
 
 
+def joint_id(mj_model, name: str) -> int:
+    """MuJoCo's id of the joint named ``name`` (`joint_name`'s ``joint<j>`` too), else -1."""
+    import mujoco
+
+    j = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name)
+    digits = name.removeprefix("joint")
+    if j < 0 and digits.isdecimal() and digits.isascii() and int(digits) < mj_model.njnt:
+        if not mujoco.mj_id2name(mj_model, mujoco.mjtObj.mjOBJ_JOINT, int(digits)):
+            j = int(digits)  # an unnamed joint, named by its id
+    return j
+
+
 def _se3(quat_wxyz, position) -> pin.SE3:
     w, x, y, z = (float(c) for c in quat_wxyz)
     return pin.SE3(pin.Quaternion(w, x, y, z).normalized().matrix(), np.array(position, float))

@@ -118,11 +118,11 @@ def compile_robot(robot: Robot):
 
 
 def _joint_maps(robot: Robot, mj_model, q: np.ndarray, mj_q: np.ndarray, T: np.ndarray) -> None:
-    import mujoco
+    from gimwatch.model.mjcf_compiled import joint_id
 
     model = robot.model
     for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
-        j = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, name)
+        j = joint_id(mj_model, name)
         if j < 0:
             raise RobotError(robot.spec, f"MuJoCo has no joint named '{name}'")
         qa, va = int(mj_model.jnt_qposadr[j]), int(mj_model.jnt_dofadr[j])

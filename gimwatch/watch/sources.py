@@ -241,6 +241,8 @@ class MujocoSource:
         return tuple(names)
 
     def _map_to(self, robot) -> None:
+        from gimwatch.model.mjcf_compiled import joint_id
+
         mujoco, model = self._mujoco, self.model
         if isinstance(robot, pin.Model):
             robot = robot_from_model(robot)
@@ -251,7 +253,7 @@ class MujocoSource:
         free = np.flatnonzero(model.jnt_type == mujoco.mjtJoint.mjJNT_FREE)
         order = np.full(robot.nv, -1, dtype=np.intp)
         for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
-            j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+            j = joint_id(model, name)
             kind = joint.shortname()
             if j < 0 and "FreeFlyer" in kind and free.size == 1:
                 j = int(free[0])  # MuJoCo's free joint often has another name
