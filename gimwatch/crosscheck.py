@@ -214,7 +214,7 @@ def crosscheck_robot(
     per_sample = not robot.urdf_xml and bool(robot.mujoco_joints)
     use_denoc = bool(robot.urdf_xml) or per_sample
     peer = "mujoco" if not use_denoc or (robot.mujoco_joints and peer is None) else peer
-    dm = denoc_model(robot, parse=True) if robot.urdf_xml else None
+    dm = denoc_model(robot, parse=True, rigid=True) if robot.urdf_xml else None
     mj_model, refusal = None, ""
     if peer == "mujoco":
         from gimwatch.model.mujoco_model import MujocoRefusal, compile_robot

@@ -176,6 +176,22 @@ MUTANTS = (
         ("tests/test_mjcf_compiled.py",),
         "a free object's stand-ins turn before their last slide (velocity order wrong)",
     ),
+    Mutant(
+        "diagonal-without-armature",
+        "gimwatch/model/inertia.py",
+        "return diagonal + robot.model.armature",
+        "return diagonal",
+        ("tests/test_mjcf_compiled.py", "-k", "armature"),
+        "the O(n) diagonal leaves MuJoCo's armature out of δ",
+    ),
+    Mutant(
+        "denoc-accepts-armature",
+        "gimwatch/metrics/denoc_robot.py",
+        "if not rigid and np.any(np.asarray(robot.model.armature) != 0):",
+        "if False:",
+        ("tests/test_mjcf_compiled.py", "-k", "armature"),
+        "DeNOC (rigid bodies) watches a robot with armature: δ and κ without it",
+    ),
     # --- mpmath references ---
     Mutant(
         "planar-reference-30-digits",

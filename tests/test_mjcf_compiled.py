@@ -49,7 +49,7 @@ def _crba(robot, q):
 
 def _denoc_gim(robot, q):
     if robot.urdf_xml:
-        return denoc_model(robot).gim(q)
+        return denoc_model(robot, rigid=True).gim(q)
     instant = instantaneous_urdf(robot.model, q)
     return DenocModel.from_urdf(instant.urdf, joint_order=instant.joint_order).gim(instant.q)
 
@@ -279,3 +279,26 @@ def test_unnamed_joints_map_between_mujoco_and_the_robot():
     kappa = watch.arrays()["watch_kappa"][0]
     assert kappa == pytest.approx(eigenvalues[-1] / eigenvalues[0], rel=1e-12)
     assert crosscheck_robot(robot, samples=2, peer="mujoco").mujoco_gim_rel_err < 1e-13
+
+
+@pytest.mark.parametrize("path", MODELS, ids=[p.stem for p in MODELS])
+def test_the_watch_keeps_mujocos_armature_in_delta_and_the_tracked_kappa(path):
+    """δ and κ tracked by Watch(robot) and Watch.from_model: those of CRBA's M, armature in.
+
+    DeNOC models rigid bodies: a robot with armature is watched through Pinocchio.
+    """
+    from gimwatch.watch import Watch
+
+    robot = _load(path)
+    for q in random_configurations(robot, 2, seed=8):
+        M = _crba(robot, q)
+        eigenvalues, diagonal = np.linalg.eigvalsh(M), np.diag(M)
+        watch = Watch(robot, ("diagonal_ratio", "kappa_tracked"))
+        from_model = Watch.from_model(robot.model, ("diagonal_ratio",))
+        watch.sample(0.0, q)
+        from_model.sample(0.0, q)
+        delta = diagonal.max() / diagonal.min()
+        assert watch.arrays()["watch_diagonal_ratio"][0] == pytest.approx(delta, rel=1e-12)
+        assert from_model.arrays()["watch_diagonal_ratio"][0] == pytest.approx(delta, rel=1e-12)
+        kappa = eigenvalues[-1] / eigenvalues[0]
+        assert watch.arrays()["watch_kappa_tracked"][0] == pytest.approx(kappa, rel=1e-9)

@@ -2,24 +2,39 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from gimwatch.denoc import DenocModel
 from gimwatch.denoc.tree import FREE_FLYER_NAME
+from gimwatch.errors import InputError
 from gimwatch.model.robots import Robot
 
 __all__ = ["denoc_model"]
 
 
-def denoc_model(robot: Robot, *, parse: bool = False) -> DenocModel:
+def denoc_model(robot: Robot, *, parse: bool = False, rigid: bool = False) -> DenocModel:
     """DeNOC's model of ``robot`` (fixed or floating base, as loaded).
 
     A generated fixed-base chain is built from its spec unless ``parse`` (then, as for every
     other robot, from its URDF text through yourdfpy). A free joint at the root of the whole
     tree, gimwatch's or an MJCF file's own, is DeNOC's free-flyer.
 
+    DeNOC models rigid bodies only: a robot whose M has joint armature (MuJoCo's
+    ``dof_armature``, kept by default) is refused unless ``rigid`` says the caller compares
+    with M without it (as `gimwatch.crosscheck` does).
+
     Raises:
         URDFError: DeNOC cannot read the robot's URDF (a joint type it lacks; an MJCF model
             with ball joints or several trees has no URDF text).
+        InputError: The robot has armature and ``rigid`` is False.
     """
+    if not rigid and np.any(np.asarray(robot.model.armature) != 0):
+        raise InputError(
+            f"{robot.name}'s armature",
+            "zero for DeNOC (rigid bodies only)",
+            "nonzero",
+            hint="load it without armature (--no-armature) or use Pinocchio",
+        )
     if robot.chain is not None and not robot.floating and not parse:
         return DenocModel.from_chain(robot.chain)  # no URDF parsing for chain:N
     order = list(robot.joint_names)

@@ -47,4 +47,5 @@ def gim_diagonal(robot: Robot, q: npt.ArrayLike, *, data: pin.Data | None = None
     cx, cy, cz = data.com[0]
     skew = np.array([[0.0, -cz, cy], [cz, 0.0, -cx], [-cy, cx, 0.0]])
     force[3:] += skew @ force[:3]  # torque about the origin: n_O = n_G + c x f
-    return np.einsum("ij,ij->j", np.reshape(data.J, (6, -1)), force)
+    diagonal = np.einsum("ij,ij->j", np.reshape(data.J, (6, -1)), force)
+    return diagonal + robot.model.armature  # rotor inertia: on M's diagonal, as in CRBA
