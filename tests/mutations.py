@@ -192,6 +192,14 @@ MUTANTS = (
         ("tests/test_mjcf_compiled.py", "-k", "armature"),
         "DeNOC (rigid bodies) watches a robot with armature: δ and κ without it",
     ),
+    Mutant(
+        "urdf-of-model-continuous-as-revolute",
+        "gimwatch/model/denoc_input.py",
+        '**{f"JointModelRUB{a}": "continuous" for a in "XYZ"},',
+        '**{f"JointModelRUB{a}": "revolute" for a in "XYZ"},',
+        ("tests/test_denoc_input.py",),
+        "a continuous joint written as a revolute one: DeNOC reads (cos θ, sin θ) as two angles",
+    ),
     # --- mpmath references ---
     Mutant(
         "planar-reference-30-digits",

@@ -62,6 +62,17 @@ def _origin(placement: pin.SE3) -> str:
     return f'<origin xyz="{_xyz(placement.translation)}" rpy="{_xyz(rpy)}"/>'
 
 
+# Pinocchio's one-DoF joints and their URDF types (a continuous joint: RUB, nq = 2).
+_ONE_DOF = {
+    **{f"JointModelR{a}": "revolute" for a in "XYZ"},
+    "JointModelRevoluteUnaligned": "revolute",
+    **{f"JointModelRUB{a}": "continuous" for a in "XYZ"},
+    "JointModelRevoluteUnboundedUnaligned": "continuous",
+    **{f"JointModelP{a}": "prismatic" for a in "XYZ"},
+    "JointModelPrismaticUnaligned": "prismatic",
+}
+
+
 def _joint_axis(kind: str, joint) -> np.ndarray:
     if kind[-1] in "XYZ" and "Unaligned" not in kind:
         return np.eye(3)["XYZ".index(kind[-1])]
@@ -70,30 +81,36 @@ def _joint_axis(kind: str, joint) -> np.ndarray:
 
 def _one_dof_joint(model: pin.Model, k: int, parent: str, child: str) -> str:
     joint, kind = model.joints[k], model.joints[k].shortname()
-    urdf_kind = "revolute" if kind.startswith("JointModelR") else "prismatic"
+    urdf_kind = _ONE_DOF[kind]
     return (
         f'<joint name="{model.names[k]}" type="{urdf_kind}">'
         f'<parent link="{parent}"/><child link="{child}"/>{_origin(model.jointPlacements[k])}'
-        f'<axis xyz="{_xyz(_joint_axis(kind, joint))}"/>'
-        f'<limit lower="{float(model.lowerPositionLimit[joint.idx_q])!r}" '
-        f'upper="{float(model.upperPositionLimit[joint.idx_q])!r}" effort="0" velocity="0"/>'
-        "</joint>"
+        f'<axis xyz="{_xyz(_joint_axis(kind, joint))}"/>{_limit(model, joint, urdf_kind)}</joint>'
     )
+
+
+def _limit(model: pin.Model, joint, urdf_kind: str) -> str:
+    if urdf_kind == "continuous":  # no limit; its two numbers are (cos θ, sin θ)
+        return ""
+    lower, upper = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+    return f'<limit lower="{float(lower)!r}" upper="{float(upper)!r}" effort="0" velocity="0"/>'
 
 
 def urdf_of_model(model: pin.Model) -> str:
     """URDF text of a Pinocchio model for DeNOC, or "" when DeNOC cannot read the tree.
 
-    DeNOC reads revolute and prismatic joints on one tree (any number of branches on a fixed
-    base), and a floating base only as the one free joint, at the root; for ball joints and
-    several floating trees see `instantaneous_urdf`.
+    DeNOC reads revolute, continuous and prismatic joints on one tree (any number of branches
+    on a fixed base), and a floating base only as the one free joint, at the root; for ball
+    joints and several floating trees see `instantaneous_urdf`.
     Each joint's placement becomes its ``<origin>``, each joint's inertia its link's
     ``<inertial>`` (about the centre of mass, in the joint frame).
     """
     kinds = [joint.shortname() for joint in model.joints[1:]]
     free = [k for k, kind in enumerate(kinds) if "FreeFlyer" in kind]
     roots = [k for k in range(1, model.njoints) if model.parents[k] == 0]
-    if any("Spherical" in kind for kind in kinds) or free not in ([], [0]):
+    if any(kind not in _ONE_DOF for kind in kinds if "FreeFlyer" not in kind):
+        return ""  # a ball, planar, composite or mimic joint: no URDF joint DeNOC reads
+    if free not in ([], [0]):
         return ""
     if free and roots != [1]:  # a free object beside a floating robot: two trees
         return ""
@@ -147,7 +164,7 @@ def instantaneous_urdf(model: pin.Model, q: np.ndarray) -> InstantaneousURDF:
             lines.append(f'<link name="{link}">{_inertial(model, k)}</link>')
             lines.append(_one_dof_joint(model, k, parent, link))
             order.append(name)
-            q_out.append(float(q[joint.idx_q]))
+            q_out.extend(q[joint.idx_q : joint.idx_q + joint.nq])  # (cos θ, sin θ) if continuous
             continue
         coordinates = q[joint.idx_q : joint.idx_q + joint.nq]
         if "FreeFlyer" in kind:

@@ -36,6 +36,7 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import check_gim
+from gimwatch.model.denoc_input import urdf_of_model
 from gimwatch.model.robots import Robot
 
 __all__ = [
@@ -91,7 +92,7 @@ def robot_from_model(model: pin.Model, *, name: str | None = None) -> Robot:
         name=label,
         spec="<pinocchio.Model>",
         model=model,
-        urdf_xml="",
+        urdf_xml=urdf_of_model(model),  # DeNOC's compiled O(n) path when it reads the tree
         source="<pinocchio.Model>",
         floating=floating,
     )
