@@ -35,16 +35,23 @@ survey: setup
 	$(VENV)/bin/gimwatch survey all --fixed --samples 200 --seed 0 --trajectory -o benchmarks/survey
 	$(PY) benchmarks/survey/update_readme.py
 
-# Full benchmark (< 20 min on 2 cores): regenerates benchmarks/ and the measured block of
-# docs/findings/accuracy-costs.md; each figure has one home (the cost sections in
-# benchmarks/cost/, the watch in a MuJoCo loop in benchmarks/watch_mujoco/, first contact in
-# benchmarks/startup/), so no figure exists twice.
+# Full benchmark (about 30 min on 2 cores): regenerates every table under benchmarks/ in one
+# run, the measured block of docs/findings/accuracy-costs.md and the table of
+# docs/findings/cost.md. Each table's JSON records the code it measured
+# (tests/test_bench_freshness.py fails once that code changes). Each figure has one home (the
+# cost sections in benchmarks/cost/, the watch in a MuJoCo loop in benchmarks/watch_mujoco/
+# and against the user's own lines in benchmarks/watch_overhead/, first contact in
+# benchmarks/startup/), so no figure exists twice. Prose that quotes a figure is checked by
+# tests/test_docs_numbers.py: update it after a run.
 bench: setup
 	$(PY) -m pip install --quiet -c constraints.txt -e '.[test,notebooks,docs,pandas]'
 	$(VENV)/bin/gimwatch bench conditioning estimators accuracy dynamics integrators longchain \
 		tighten -o benchmarks --page docs/findings/accuracy-costs.md
 	$(VENV)/bin/gimwatch bench lean tracker denoc watch -o benchmarks/cost
+	$(PY) -m gimwatch.bench.cost_page docs/findings/cost.md benchmarks/cost
 	$(VENV)/bin/gimwatch bench watch_mujoco -o benchmarks/watch_mujoco
+	$(VENV)/bin/gimwatch bench watch_overhead -o benchmarks/watch_overhead
+	$(VENV)/bin/gimwatch bench explain -o benchmarks/explain
 	$(VENV)/bin/gimwatch bench startup -o benchmarks/startup
 
 # Planted bugs the tests must catch (tests/mutations.py): each applied in a temporary copy of

@@ -5,6 +5,8 @@ from __future__ import annotations
 import pytest
 
 from gimwatch.bench.freshness import (
+    FINGERPRINT_KEY,
+    PACKAGE_ROOT,
     fingerprint,
     module_digest,
     modules_imported_by,
@@ -60,3 +62,19 @@ def test_the_probe_lists_what_a_command_imports(tmp_path):
 def test_a_failing_probe_is_an_error(tmp_path):
     with pytest.raises(RuntimeError, match="failed"):
         modules_imported_by([["-m", "gimwatch", "analyze", "no-such-robot"]], tmp_path)
+
+
+def test_a_bench_run_writes_the_measured_modules_into_each_table(tmp_path):
+    """A quick section's JSON tables carry the digests of what the process ran (not the CLI)."""
+    import json
+
+    from gimwatch.bench import run_bench
+
+    run_bench(["dynamics"], tmp_path / "out", quick=True)
+    record = json.loads((tmp_path / "out" / "dynamics.json").read_text(encoding="utf-8"))
+    modules = record[FINGERPRINT_KEY]["modules"]
+    assert "gimwatch/bench/dynamics.py" in modules and "gimwatch/denoc/lean.py" in modules
+    assert not any(name.startswith(("gimwatch/cli/", "gimwatch/output/")) for name in modules)
+    assert stale_modules(record[FINGERPRINT_KEY]) == []
+    for name, digest in modules.items():  # each digest is the module's code as it is now
+        assert digest == module_digest(PACKAGE_ROOT / name)

@@ -39,7 +39,9 @@ def test_quick_watch_overhead_section_times_each_loop_and_metric(tmp_path):
     assert tuple(rows[0]) == OVERHEAD_COLUMNS
     spec = OVERHEAD_ROBOTS[0][0]
     assert {(r["robot"], r["loop"], r["metric"]) for r in rows} == {
-        (spec, loop, metric) for loop in ("mujoco", "pinocchio") for metric in ("kappa", "delta")
+        (spec, loop, metric)
+        for loop in ("mujoco", "pinocchio", "robot")
+        for metric in ("kappa", "delta")
     }
     for row in rows:
         ratio = float(row["watch_us"]) / float(row["bare_us"])

@@ -136,6 +136,7 @@ def run_bench(
     Raises:
         InputError: An unknown section, or one whose module cannot be imported.
     """
+    from gimwatch.bench.freshness import fingerprint, loaded_modules
     from gimwatch.bench.report import environment, update_readme, write_report, write_section
 
     names = list(which)
@@ -165,6 +166,8 @@ def run_bench(
                 progress(f"section {name}")
                 module = importlib.import_module(SECTIONS[name].module)
                 result = module.run(context)
+                if not result.measured_code:  # what this process ran to measure it
+                    result.measured_code = fingerprint(loaded_modules())
                 write_section(staging, result)
                 results.append(result)
         finally:  # an interrupted run still reports (and keeps) the sections it finished

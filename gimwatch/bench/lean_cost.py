@@ -5,9 +5,10 @@ in one run, median µs per call (`gimwatch.bench.timing.time_call`, BLAS on one 
 the CLI pins it with threadpoolctl):
 
 * ``delta_watch_us`` — one
-  [`sample`][gimwatch.watch.watch.Watch.sample] watching δ only, what
-  a simulation pays per sample (the watch takes diag M from DeNOC's compiled
-  [`LeanModel`][gimwatch.denoc.LeanModel]: one call, buffers preallocated);
+  [`sample`][gimwatch.watch.watch.Watch.sample] watching δ only, the watch built as a user
+  builds it (``Watch(robot, ("diagonal_ratio",))``, docs/watch.md): it takes diag M from
+  DeNOC's compiled [`LeanModel`][gimwatch.denoc.LeanModel] (one call, buffers preallocated)
+  and checks q;
 * ``delta_lean_us`` — δ alone from ``LeanModel.diagonal_ratio`` (one compiled call);
 * ``delta_pinocchio_us`` — the Pinocchio route: ``computeCentroidalMap`` + the column dot
   products of [`gim_diagonal`][gimwatch.model.inertia.gim_diagonal], then δ;
@@ -114,7 +115,7 @@ def measure(context: BenchContext) -> Table:
         rng = np.random.default_rng(context.seed)
         v, tau = rng.standard_normal((2, robot.nv))
         backend = DenocBackend(robot, GRAVITY)  # its LeanModel: no Pinocchio Data needed
-        watch = Watch(robot, ("diagonal_ratio",), dynamics=backend)
+        watch = Watch(robot, ("diagonal_ratio",))  # as a user builds it (docs/watch.md)
         lean = backend.lean
 
         def timed(fn, repeats=repeats, min_round=min_round) -> float:

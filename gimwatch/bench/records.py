@@ -41,6 +41,9 @@ class SectionResult:
         markdown: The section's report text (headline tables and conclusions).
         headline: A shorter text for the docs page "What accuracy costs".
         summary: Key figures for ``summary.json`` (ratios, acceptance checks).
+        measured_code: The fingerprint of the code measured
+            (`gimwatch.bench.freshness.fingerprint`), written into each table's JSON;
+            filled by the run when the section leaves it empty.
     """
 
     name: str
@@ -50,6 +53,7 @@ class SectionResult:
     markdown: str = ""
     headline: str = ""
     summary: dict = field(default_factory=dict)
+    measured_code: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from gimwatch._version import __version__
+from gimwatch.bench.freshness import FINGERPRINT_KEY
 from gimwatch.bench.records import SectionResult, Table
 from gimwatch.bench.timing import blas_thread_ratio, thread_settings
 from gimwatch.errors import InputError
@@ -73,19 +74,24 @@ def _csv_text(table: Table) -> str:
     return buffer.getvalue()
 
 
-def write_table(output: Path, table: Table) -> tuple[Path, Path]:
-    """Write ``<name>.csv`` and ``<name>.json`` (``{"columns": [...], "rows": [...]}``)."""
+def write_table(output: Path, table: Table, measured_code: dict | None = None) -> tuple[Path, Path]:
+    """Write ``<name>.csv`` and ``<name>.json`` (``{"columns": [...], "rows": [...]}``).
+
+    ``measured_code`` (a `gimwatch.bench.freshness.fingerprint`) goes into the JSON under
+    ``measured_code``: a test then tells when the table is older than the code it measured.
+    """
     csv_path = write_text_atomic(output / f"{table.name}.csv", _csv_text(table))
-    json_path = write_json_atomic(
-        output / f"{table.name}.json", {"columns": list(table.columns), "rows": table.rows}
-    )
+    record: dict = {"columns": list(table.columns), "rows": table.rows}
+    if measured_code:
+        record[FINGERPRINT_KEY] = measured_code
+    json_path = write_json_atomic(output / f"{table.name}.json", record)
     return csv_path, json_path
 
 
 def write_section(output: Path, result: SectionResult) -> None:
     """Write a finished section's tables (its figures are written by the section itself)."""
     for table in result.tables:
-        write_table(output, table)
+        write_table(output, table, result.measured_code)
 
 
 def _header(env: dict) -> list[str]:

@@ -197,4 +197,5 @@ def run(context: BenchContext) -> SectionResult:
         markdown=markdown,
         headline=headline,
         summary=summary,
+        measured_code=code,  # the modules the timed processes imported, not this one's
     )

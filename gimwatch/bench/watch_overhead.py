@@ -7,9 +7,10 @@ computation of the same quantity and against one step of the loop it sits in.
 * MuJoCo loop (``Watch.from_mujoco(model, data, ...)``, ``sample(t)`` reading ``data``):
   κ against ``mj_fullM`` + ``numpy.linalg.eigvalsh``; δ against ``data.M[dof_Madr]``
   max/min; both against ``mj_step``.
-* Pinocchio loop (``Watch(robot, ...)``, ``sample(t, q)``): κ against ``pin.crba`` +
-  ``eigvalsh``; δ against the O(n) diagonal (DeNOC's compiled diag M, max/min, unchecked q);
-  both against ``pin.aba``.
+* Pinocchio loop (``Watch.from_model(model, ...)`` as docs/watch.md shows it, loop
+  ``pinocchio``; ``Watch(robot, ...)``, loop ``robot``; ``sample(t, q)``): κ against
+  ``pin.crba`` + ``eigvalsh``; δ against the O(n) diagonal (DeNOC's compiled diag M,
+  max/min, unchecked q); both against ``pin.aba``.
 
 A second table (``watch_tracker``): on the paper's rod chains of n links moved smoothly
 (``Watch(robot, ...)``, one sample per small step in q), a κ sample by the dense solve
@@ -100,7 +101,11 @@ def _mujoco_cases(robot, seed: int):
     }
 
 
-def _pinocchio_cases(robot, seed: int):
+def _pinocchio_cases(robot, seed: int, *, from_model: bool = True):
+    """The Pinocchio loop: its step, and per metric (bare lines, watch sample).
+
+    The watch as docs/watch.md builds it there (``from_model``) or from the gimwatch robot.
+    """
     model, data = robot.model, robot.new_data()
     q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
     v = np.zeros(model.nv)
@@ -114,8 +119,11 @@ def _pinocchio_cases(robot, seed: int):
         diag = lean.gim_diagonal(q)
         return diag.max() / diag.min()
 
-    kappa = Watch(robot, ("kappa",))
-    delta = Watch(robot, ("diagonal_ratio",))
+    if from_model:
+        kappa = Watch.from_model(model, ("kappa",))
+        delta = Watch.from_model(model, ("diagonal_ratio",))
+    else:
+        kappa, delta = Watch(robot, ("kappa",)), Watch(robot, ("diagonal_ratio",))
     return lambda: pin.aba(model, data, q, v, v), {
         "kappa": (bare_kappa, lambda: kappa.sample(0.0, q)),
         "delta": (bare_delta, lambda: delta.sample(0.0, q)),
@@ -129,7 +137,12 @@ def measure(context: BenchContext) -> Table:
     table = Table("watch_overhead", COLUMNS)
     for spec, floating in robots:
         robot = load_robot(spec, floating=floating)
-        for loop, build in (("mujoco", _mujoco_cases), ("pinocchio", _pinocchio_cases)):
+        loops = (
+            ("mujoco", _mujoco_cases),
+            ("pinocchio", _pinocchio_cases),
+            ("robot", lambda robot, seed: _pinocchio_cases(robot, seed, from_model=False)),
+        )
+        for loop, build in loops:
             step, cases = build(robot, context.seed)
             context.progress(f"  {spec} ({loop}): {rounds} rounds")
             times = {key: [] for key in ("step", *[f"{m}/{s}" for m in cases for s in "bw"])}
@@ -208,7 +221,9 @@ def run(context: BenchContext) -> SectionResult:
         "One watch sample against the user's own computation of the same quantity "
         "(MuJoCo: `mj_fullM` + `eigvalsh`, `data.M[dof_Madr]` max/min; Pinocchio: `pin.crba` "
         "+ `eigvalsh`, DeNOC's O(n) diagonal) and against one step of the loop (`mj_step`, "
-        "`pin.aba`); medians of interleaved rounds, ratios within a round.",
+        "`pin.aba`); medians of interleaved rounds, ratios within a round. Loop `mujoco`: "
+        "`Watch.from_mujoco(model, data, ...)`; `pinocchio`: `Watch.from_model(model, ...)`; "
+        "`robot`: `Watch(robot, ...)`.",
         "",
         markdown_table(table.rows, columns),
         "",
