@@ -76,6 +76,8 @@ SWAP = (
 )
 ESTIMATOR = ("tests/test_estimator_quality.py",)
 PRECISION = ("tests/test_reference_precision.py", "-k", "keeps_fifty")
+#: atomic writes of single files (gimwatch/output/atomic.py)
+ATOMIC = ("tests/test_results.py",)
 
 MUTANTS = (
     # --- DeNOC recursions (numpy, gimwatch/denoc/recursions.py) ---
@@ -553,6 +555,22 @@ MUTANTS = (
         "        except BaseException:\n            raise\n",
         SWAP,
         "a failed second rename leaves the previous results folder moved aside",
+    ),
+    Mutant(
+        "atomic-temporary-left",
+        "gimwatch/output/atomic.py",
+        "            Path(tmp).unlink(missing_ok=True)\n",
+        "            pass\n",
+        ATOMIC,
+        "a failed atomic write leaves its temporary file behind",
+    ),
+    Mutant(
+        "atomic-copy-not-rename",
+        "gimwatch/output/atomic.py",
+        "            os.replace(tmp, path)\n",
+        "            path.write_bytes(Path(tmp).read_bytes())\n",
+        ATOMIC,
+        "a successful write copies its temporary into place (not atomic) and leaves it behind",
     ),
     Mutant(
         "estimator-pearson-linear",
