@@ -76,6 +76,8 @@ SWAP = (
 )
 ESTIMATOR = ("tests/test_estimator_quality.py",)
 PRECISION = ("tests/test_reference_precision.py", "-k", "keeps_fifty")
+#: the stale clean-up beside a results folder (gimwatch/output/swap.py), called directly
+HOSTILE = ("tests/test_faults_folders_hostile.py",)
 #: atomic writes of single files (gimwatch/output/atomic.py)
 ATOMIC = ("tests/test_results.py",)
 
@@ -555,6 +557,47 @@ MUTANTS = (
         "        except BaseException:\n            raise\n",
         SWAP,
         "a failed second rename leaves the previous results folder moved aside",
+    ),
+    Mutant(
+        "swap-stale-takes-user-folders",
+        "gimwatch/output/swap.py",
+        "or path == keep or not is_temporary(path):",
+        "or path == keep:",
+        HOSTILE,
+        "the clean-up after a killed writer removes a user's folder named like a staging one",
+    ),
+    Mutant(
+        "swap-staging-record-ignored",
+        "gimwatch/output/swap.py",
+        "return stat.S_ISDIR(os.lstat(path).st_mode) and stat.S_ISREG(",
+        "return stat.S_ISDIR(os.lstat(path).st_mode) or stat.S_ISREG(",
+        HOSTILE,
+        "any folder counts as a writer's temporary, with or without the record",
+    ),
+    Mutant(
+        "swap-stale-name-contains",
+        "gimwatch/output/swap.py",
+        "if not entry.name.startswith(prefixes) or",
+        "if not any(part in entry.name for part in (STAGING, OLD)) or",
+        HOSTILE,
+        "the clean-up takes any recorded folder whose name contains the parts (another "
+        "results folder's live staging folder)",
+    ),
+    Mutant(
+        "swap-stale-old-not-restored",
+        "gimwatch/output/swap.py",
+        "if OLD in entry.name and not os.path.lexists(target):",
+        "if OLD in entry.name and not os.path.lexists(target) and False:",
+        HOSTILE,
+        "a previous folder a killed writer moved aside is deleted, not put back",
+    ),
+    Mutant(
+        "swap-restored-keeps-record",
+        "gimwatch/output/swap.py",
+        "                    (target / STAGING_RECORD).unlink(missing_ok=True)\n",
+        "",
+        HOSTILE,
+        "a previous folder put back keeps the staging record (the next fallback swap fails)",
     ),
     Mutant(
         "atomic-temporary-left",
