@@ -655,6 +655,26 @@ MUTANTS = (
         PRECISION,
         "the planar reference computes M(q) at 15 digits",
     ),
+    Mutant(
+        "reference-tree-aba-30-digits",
+        "gimwatch/stress/reference_tree.py",
+        "        with mpmath.workdps(self.dps):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        "        with mpmath.workdps(30):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        PRECISION,
+        "the tree reference's ABA runs at 30 digits whatever its dps (its 100-digit run too)",
+    ),
+    Mutant(
+        "reference-tree-rnea-30-digits",
+        "gimwatch/stress/reference_tree.py",
+        "        with mpmath.workdps(self.dps):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            acc, force",
+        "        with mpmath.workdps(30):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            acc, force",
+        PRECISION,
+        "the tree reference's RNEA runs at 30 digits whatever its dps",
+    ),
 )
 
 
