@@ -1,11 +1,13 @@
 import json
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM
 
 from gimwatch.cli import main
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.model.robots import load_robot
 
 
 def run(capsys, *argv):
@@ -61,6 +63,10 @@ def test_analyze_random_gives_a_list_and_q_is_used(capsys):
     code, out, _ = run(capsys, "analyze", "ur5", "--json", "--q", *map(str, q))
     (record,) = json.loads(out)["configurations"]
     assert record["kappa"] == pytest.approx(records[1]["kappa"], rel=1e-12)
+    # and both are κ of that q: NumPy on Pinocchio's CRBA, not the command again
+    robot = load_robot("ur5")
+    values = np.linalg.eigvalsh(pin.crba(robot.model, robot.new_data(), np.array(q)))
+    assert record["kappa"] == pytest.approx(values[-1] / values[0], rel=1e-10)
 
 
 def test_analyze_csv_has_the_json_numbers(capsys):
