@@ -3,6 +3,7 @@ import json
 import numpy as np
 import pinocchio as pin
 import pytest
+from closed_forms import rod_chain_gim
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM
 
 from gimwatch.cli import main
@@ -192,9 +193,20 @@ def test_analyze_linear_path_agrees_with_crba(capsys):
     linear_records = json.loads(linear)["configurations"]
     for a, b in zip(dense_records, linear_records, strict=True):
         assert a["q"] == b["q"]
-        np.testing.assert_allclose(b["diagonal"], a["diagonal"], rtol=1e-12)
-        for key in ("kappa", "lambda_min", "lambda_max", "pivot_ratio_backward"):
-            assert b[key] == pytest.approx(a[key], rel=1e-8), key
+        # each path against NumPy on the closed-form rod chain's M, not against the other
+        M = rod_chain_gim(np.array(a["q"]))
+        values = np.linalg.eigvalsh(M)
+        backward = np.diag(np.linalg.cholesky(M[::-1, ::-1])) ** 2
+        expected = {
+            "kappa": values[-1] / values[0],
+            "lambda_min": values[0],
+            "lambda_max": values[-1],
+            "pivot_ratio_backward": backward.max() / backward.min(),
+        }
+        for record in (a, b):
+            np.testing.assert_allclose(record["diagonal"], np.diag(M), rtol=1e-12)
+            for key, value in expected.items():  # κ ≈ 1e5 here: eps·κ ≈ 2e-11
+                assert record[key] == pytest.approx(value, rel=1e-8), (record["method"], key)
 
 
 def test_analyze_metrics_limit_the_linear_work(capsys):
