@@ -197,8 +197,9 @@ def test_the_clean_up_removes_what_writers_recorded_and_nothing_else(tmp_path):
 
 def test_a_previous_folder_a_killed_writer_moved_aside_is_put_back(tmp_path, monkeypatch):
     """A writer killed between the two renames of the fallback swap left ``out`` moved aside
-    (recorded before the rename): the next writer puts it back as it was, with no record in it,
-    so a write that then fails (or is not committed) still leaves the previous results."""
+    (recorded before the rename): the next writer puts it back as it was, with no record in it
+    (a record left there made every later two-rename swap fail with "File exists"), so a write
+    that is not committed still leaves the previous results, and the next one succeeds."""
     out = tmp_path / "out"
     _results_folder(out, {"summary.json": "previous"})
     before = _listing(out)
