@@ -76,6 +76,10 @@ SWAP = (
 )
 ESTIMATOR = ("tests/test_estimator_quality.py",)
 PRECISION = ("tests/test_reference_precision.py", "-k", "keeps_fifty")
+#: the stale clean-up beside a results folder (gimwatch/output/swap.py), called directly
+HOSTILE = ("tests/test_faults_folders_hostile.py",)
+#: atomic writes of single files (gimwatch/output/atomic.py)
+ATOMIC = ("tests/test_results.py",)
 
 MUTANTS = (
     # --- DeNOC recursions (numpy, gimwatch/denoc/recursions.py) ---
@@ -595,6 +599,63 @@ MUTANTS = (
         "a failed second rename leaves the previous results folder moved aside",
     ),
     Mutant(
+        "swap-stale-takes-user-folders",
+        "gimwatch/output/swap.py",
+        "or path == keep or not is_temporary(path):",
+        "or path == keep:",
+        HOSTILE,
+        "the clean-up after a killed writer removes a user's folder named like a staging one",
+    ),
+    Mutant(
+        "swap-staging-record-ignored",
+        "gimwatch/output/swap.py",
+        "return stat.S_ISDIR(os.lstat(path).st_mode) and stat.S_ISREG(",
+        "return stat.S_ISDIR(os.lstat(path).st_mode) or stat.S_ISREG(",
+        HOSTILE,
+        "any folder counts as a writer's temporary, with or without the record",
+    ),
+    Mutant(
+        "swap-stale-name-contains",
+        "gimwatch/output/swap.py",
+        "if not entry.name.startswith(prefixes) or",
+        "if not any(part in entry.name for part in (STAGING, OLD)) or",
+        HOSTILE,
+        "the clean-up takes any recorded folder whose name contains the parts (another "
+        "results folder's live staging folder)",
+    ),
+    Mutant(
+        "swap-stale-old-not-restored",
+        "gimwatch/output/swap.py",
+        "if OLD in entry.name and not os.path.lexists(target):",
+        "if OLD in entry.name and not os.path.lexists(target) and False:",
+        HOSTILE,
+        "a previous folder a killed writer moved aside is deleted, not put back",
+    ),
+    Mutant(
+        "swap-restored-keeps-record",
+        "gimwatch/output/swap.py",
+        "                    (target / STAGING_RECORD).unlink(missing_ok=True)\n",
+        "",
+        HOSTILE,
+        "a previous folder put back keeps the staging record (the next fallback swap fails)",
+    ),
+    Mutant(
+        "atomic-temporary-left",
+        "gimwatch/output/atomic.py",
+        "            Path(tmp).unlink(missing_ok=True)\n",
+        "            pass\n",
+        ATOMIC,
+        "a failed atomic write leaves its temporary file behind",
+    ),
+    Mutant(
+        "atomic-copy-not-rename",
+        "gimwatch/output/atomic.py",
+        "            os.replace(tmp, path)\n",
+        "            path.write_bytes(Path(tmp).read_bytes())\n",
+        ATOMIC,
+        "a successful write copies its temporary into place (not atomic) and leaves it behind",
+    ),
+    Mutant(
         "estimator-pearson-linear",
         "gimwatch/metrics/estimator_quality.py",
         "scipy.stats.pearsonr(np.log(delta), np.log(kappa))",
@@ -633,6 +694,26 @@ MUTANTS = (
         '        with mpmath.workdps(15):\n            D = self._parts(q, None)["D"]',
         PRECISION,
         "the planar reference computes M(q) at 15 digits",
+    ),
+    Mutant(
+        "reference-tree-aba-30-digits",
+        "gimwatch/stress/reference_tree.py",
+        "        with mpmath.workdps(self.dps):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        "        with mpmath.workdps(30):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        PRECISION,
+        "the tree reference's ABA runs at 30 digits whatever its dps (its 100-digit run too)",
+    ),
+    Mutant(
+        "reference-tree-rnea-30-digits",
+        "gimwatch/stress/reference_tree.py",
+        "        with mpmath.workdps(self.dps):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            acc, force",
+        "        with mpmath.workdps(30):\n            X, S = self._joints(q)\n"
+        "            twist, bias, _ = self._velocities(X, S, v)\n            acc, force",
+        PRECISION,
+        "the tree reference's RNEA runs at 30 digits whatever its dps",
     ),
 )
 

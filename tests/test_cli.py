@@ -1,11 +1,14 @@
 import json
 
 import numpy as np
+import pinocchio as pin
 import pytest
+from closed_forms import rod_chain_gim
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM
 
 from gimwatch.cli import main
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
+from gimwatch.model.robots import load_robot
 
 
 def run(capsys, *argv):
@@ -61,6 +64,10 @@ def test_analyze_random_gives_a_list_and_q_is_used(capsys):
     code, out, _ = run(capsys, "analyze", "ur5", "--json", "--q", *map(str, q))
     (record,) = json.loads(out)["configurations"]
     assert record["kappa"] == pytest.approx(records[1]["kappa"], rel=1e-12)
+    # and both are κ of that q: NumPy on Pinocchio's CRBA, not the command again
+    robot = load_robot("ur5")
+    values = np.linalg.eigvalsh(pin.crba(robot.model, robot.new_data(), np.array(q)))
+    assert record["kappa"] == pytest.approx(values[-1] / values[0], rel=1e-10)
 
 
 def test_analyze_csv_has_the_json_numbers(capsys):
@@ -186,9 +193,20 @@ def test_analyze_linear_path_agrees_with_crba(capsys):
     linear_records = json.loads(linear)["configurations"]
     for a, b in zip(dense_records, linear_records, strict=True):
         assert a["q"] == b["q"]
-        np.testing.assert_allclose(b["diagonal"], a["diagonal"], rtol=1e-12)
-        for key in ("kappa", "lambda_min", "lambda_max", "pivot_ratio_backward"):
-            assert b[key] == pytest.approx(a[key], rel=1e-8), key
+        # each path against NumPy on the closed-form rod chain's M, not against the other
+        M = rod_chain_gim(np.array(a["q"]))
+        values = np.linalg.eigvalsh(M)
+        backward = np.diag(np.linalg.cholesky(M[::-1, ::-1])) ** 2
+        expected = {
+            "kappa": values[-1] / values[0],
+            "lambda_min": values[0],
+            "lambda_max": values[-1],
+            "pivot_ratio_backward": backward.max() / backward.min(),
+        }
+        for record in (a, b):
+            np.testing.assert_allclose(record["diagonal"], np.diag(M), rtol=1e-12)
+            for key, value in expected.items():  # κ ≈ 1e5 here: eps·κ ≈ 2e-11
+                assert record[key] == pytest.approx(value, rel=1e-8), (record["method"], key)
 
 
 def test_analyze_metrics_limit_the_linear_work(capsys):

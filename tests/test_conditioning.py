@@ -85,9 +85,15 @@ def test_scaled_diagonal_ratio_is_calibrated_once():
     estimator = ScaledDiagonalRatio()
     M0 = paper_matrix()
     alpha = estimator.calibrate(M0)
-    assert alpha == pytest.approx(condition_number(M0) / diagonal_ratio(M0))
-    assert estimator(M0) == pytest.approx(condition_number(M0))
-    assert estimator(np.diag(M0)) == pytest.approx(condition_number(M0))
+    # α = κ(M0)/δ(M0) (Eq. 15) from NumPy, not from gimwatch's condition_number/diagonal_ratio
+    values, diagonal = np.linalg.eigvalsh(M0), np.diag(M0)
+    kappa0 = values[-1] / values[0]
+    assert alpha == pytest.approx(kappa0 / (diagonal.max() / diagonal.min()), rel=1e-12)
+    assert estimator(M0) == pytest.approx(kappa0, rel=1e-12)
+    assert estimator(np.diag(M0)) == pytest.approx(kappa0, rel=1e-12)
+    M1 = paper_matrix() + np.diag([0.0, 0.0, 0.0, 0.5])  # a later sample: δ changes, α does not
+    d1 = np.diag(M1)
+    assert estimator(M1) == pytest.approx(alpha * d1.max() / d1.min(), rel=1e-12)
     with pytest.raises(ConditioningError, match="already calibrated"):
         estimator.calibrate(M0)
     with pytest.raises(ConditioningError, match="needs a full GIM"):

@@ -100,10 +100,10 @@ def test_chain_configurations_are_those_of_random_configurations():
 
 @pytest.mark.parametrize("n", [5, 40, 200])
 def test_matrix_free_kappa_matches_the_dense_eigensolver(n):
-    state = DenocModel.from_chain(chain_spec(n)).state(
-        chain_configurations(chain_spec(n), 1, seed=n)[0]
-    )
-    values = np.linalg.eigvalsh(state.dense())
+    q = chain_configurations(chain_spec(n), 1, seed=n)[0]
+    state = DenocModel.from_chain(chain_spec(n)).state(q)
+    # eigvalsh of the closed-form rod chain's M, not of DeNOC's own dense M
+    values = np.linalg.eigvalsh(rod_chain_gim(q))
     found = extreme_eigenvalues(state, seed=0)
     assert found.kappa == pytest.approx(values[-1] / values[0], rel=1e-7)
     assert found.lambda_min == pytest.approx(values[0], rel=1e-7)

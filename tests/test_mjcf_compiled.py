@@ -144,7 +144,8 @@ def test_crosscheck_compares_denoc_pinocchio_and_mujoco(path):
 
 @pytest.mark.parametrize("stem", ["humanoid", "hopper"])
 def test_the_watch_on_mujoco_and_on_the_robot_agree(stem):
-    """Watch.from_mujoco at MuJoCo's qpos == Watch(robot) at the mapped q (κ and δ)."""
+    """Watch.from_mujoco at MuJoCo's qpos and Watch(robot) at the mapped q give κ and δ of
+    NumPy on mj_fullM and on Pinocchio's CRBA respectively, and those two agree."""
     from gimwatch.watch.watch import Watch
 
     path = FEATURES / f"{stem}.xml"
@@ -153,11 +154,22 @@ def test_the_watch_on_mujoco_and_on_the_robot_agree(stem):
     mj_model.tendon_armature[:] = 0  # gimwatch leaves tendon armature out (warned)
     on_mujoco = Watch.from_mujoco(mj_model, mujoco.MjData(mj_model), robot=robot)
     on_robot = Watch(robot, ("kappa", "diagonal_ratio"))
+    from_mujoco, from_crba = [], []
     for t, q in enumerate(random_configurations(robot, 3, seed=4)):
-        on_mujoco.sample(t, qpos_from_q(robot.model, q))
+        qpos = qpos_from_q(robot.model, q)
+        on_mujoco.sample(t, qpos)
         on_robot.sample(t, q)
-    for name in ("kappa", "diagonal_ratio"):
-        np.testing.assert_allclose(on_mujoco.array(name), on_robot.array(name), rtol=1e-10)
+        for M, out in (
+            (_mujoco_reference(path, qpos)[0], from_mujoco),
+            (_crba(robot, q), from_crba),
+        ):
+            values, diagonal = np.linalg.eigvalsh(M), np.diag(M)
+            out.append((values[-1] / values[0], diagonal.max() / diagonal.min()))
+    for k, name in enumerate(("kappa", "diagonal_ratio")):
+        mujoco_values, crba_values = [r[k] for r in from_mujoco], [r[k] for r in from_crba]
+        np.testing.assert_allclose(on_mujoco.array(name), mujoco_values, rtol=1e-10)
+        np.testing.assert_allclose(on_robot.array(name), crba_values, rtol=1e-10)
+        np.testing.assert_allclose(mujoco_values, crba_values, rtol=1e-10)
 
 
 def _qpos_text(stem):

@@ -7,7 +7,9 @@ reference loses in b or in the solve shows in q̈. On the stress cases below (κ
 digits give no digit at all, and 50 digits (the default, what the stress suite uses) agree
 with 100 digits to the last bit. mpmath's arithmetic is deterministic, so these margins hold
 on any machine. The planar and tree references, written independently, agree to the last bit
-on the same cancellation case.
+on the same cancellation case. The tree reference's ABA is also held against its RNEA solved at
+100 digits (a different algorithm), so an ABA that ignored its ``dps`` cannot pass by being
+wrong in the same way at 100 digits.
 """
 
 import mpmath
@@ -36,11 +38,32 @@ def _case(name):
         kwargs = {} if dps is None else {"dps": dps}
         return PlanarChainReference(case.spec, gravity_m_s2=case.gravity_m_s2[:2], **kwargs)
 
-    def tree_ref(dps=None):
+    def tree_ref(dps=None, gravity=case.gravity_m_s2):
         kwargs = {} if dps is None else {"dps": dps}
-        return TreeReference(tree, index, index, gravity=case.gravity_m_s2, **kwargs)
+        return TreeReference(tree, index, index, gravity=gravity, **kwargs)
 
     return q, v, planar, tree_ref
+
+
+def _rnea_solution(tree_ref, q, v, tau, dps=100):
+    """q̈ = M⁻¹ (τ − b) at ``dps`` digits from the tree reference's RNEA alone, not its ABA.
+
+    M column by column (RNEA without gravity at v = 0, q̈ = e_j), b = RNEA(q, v, 0), then
+    mpmath's LU solve: a different algorithm from the ABA it checks (Featherstone Table 5.1,
+    not 7.1), so a precision lost in the ABA alone cannot hide in both sides.
+    """
+    n = len(tau)
+    inertia_only = tree_ref(dps, gravity=(0.0, 0.0, 0.0))
+    with mpmath.workdps(dps):
+        M = mpmath.matrix(n, n)
+        for j in range(n):
+            column = inertia_only.inverse_dynamics(q, np.zeros(n), np.eye(n)[j])
+            for i in range(n):
+                M[i, j] = column[i]
+        bias = tree_ref(dps).inverse_dynamics(q, v, np.zeros(n))
+        rhs = mpmath.matrix([mpmath.mpf(float(t)) - b for t, b in zip(tau, bias, strict=True)])
+        solution = mpmath.lu_solve(M, rhs)
+        return [solution[i] for i in range(n)]
 
 
 def _solve(reference, q, v, tau):
@@ -61,10 +84,17 @@ def test_planar_reference_needs_its_fifty_digits():
 
 
 def test_tree_reference_needs_its_fifty_digits():
+    """q̈ under cancellation (τ = b rounded to float64) on tapered-30, κ ≈ 8e19.
+
+    The truth is the RNEA solve at 100 digits (`_rnea_solution`), not the ABA at 100 digits:
+    an ABA that ignored its ``dps`` would give the same wrong digits at 100 and at 50. The
+    default agrees with it to 1e-15 (far below κ·eps ≈ 2e4); 30 digits miss by 8e-12.
+    """
     q, v, _, tree = _case("tapered-30")
     tau = np.array([float(x) for x in tree(80).inverse_dynamics(q, v, np.zeros(q.size))])
-    truth = tree(100).forward_dynamics(q, v, tau)
+    truth = np.array([float(x) for x in _rnea_solution(tree, q, v, tau)])
     np.testing.assert_allclose(tree().forward_dynamics(q, v, tau), truth, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(tree(100).forward_dynamics(q, v, tau), truth, rtol=1e-15, atol=0)
     assert not _relative(_solve(tree(30), q, v, tau), truth) <= 1e-13
     assert not _relative(_solve(tree(15), q, v, tau), truth) <= 1e-3
     assert mpmath.mp.dps == 15
@@ -107,20 +137,26 @@ def test_planar_mass_matrix_keeps_fifty_digits():
         assert values[-1] / values[0] > 1e19  # the case is as ill-conditioned as stated
 
 
-def test_tree_aba_keeps_fifty_digits_in_mpmath():
-    """The tree reference's unrounded q̈ (``forward_dynamics_mp``) on tapered-30 (κ ≈ 8e19).
+@pytest.mark.parametrize("name", ["tapered-30", "mixed-spatial-24"])
+def test_tree_aba_keeps_fifty_digits_in_mpmath(name):
+    """The tree reference's unrounded q̈ (``forward_dynamics_mp``) against two truths.
 
-    No cancellation is set up here (τ random): the 50-digit q̈ agrees with the 100-digit one
-    to 1e-40 of its size, 15 and 30 digits do not (measured 2.1e-16 and 3.9e-31). The float64
-    rounding of ``forward_dynamics`` would hide this; the mpmath values do not.
+    tapered-30 (planar, κ ≈ 8e19) and mixed-spatial-24 (axes z, y, x, every third joint
+    prismatic). No cancellation is set up here (τ random): the 50-digit q̈ agrees with the
+    100-digit ABA and with the 100-digit RNEA solve (`_rnea_solution`, independent of the ABA)
+    to 1e-40 of its size, 15 and 30 digits do not (measured 2e-16 / 1.5e-15 and 3e-31 /
+    5e-31; 50 digits: 2e-51 / 9e-51). The float64 rounding of ``forward_dynamics`` would hide
+    this; the mpmath values do not. The two truths agree to 1e-98.
     """
-    q, v, _, tree = _case("tapered-30")
+    q, v, _, tree = _case(name)
     tau = np.random.default_rng(4).uniform(-1.0, 1.0, q.size)
-    reference = tree(100)
     with mpmath.workdps(100):
-        a = reference.forward_dynamics_mp(q, v, tau)
+        aba = tree(100).forward_dynamics_mp(q, v, tau)
+        rnea = _rnea_solution(tree, q, v, tau)
+        assert _max_relative(aba, rnea) <= 1e-95
     for digits, ok in ((None, True), (30, False), (15, False)):
         with mpmath.workdps(100):
             a_d = tree(digits).forward_dynamics_mp(q, v, tau)
-            error = _max_relative(a_d, a)
-        assert (error <= 1e-40) is ok, (digits, error)
+            errors = (_max_relative(a_d, aba), _max_relative(a_d, rnea))
+        assert (errors[0] <= 1e-40, errors[1] <= 1e-40) == (ok, ok), (digits, errors)
+    assert mpmath.mp.dps == 15

@@ -111,11 +111,14 @@ def test_failures_are_reported_and_the_survey_goes_on(serial):
 
 
 def test_process_pool_gives_identical_results(serial):
+    """Regression test: two worker processes reproduce the serial survey bit for bit (the
+    serial values are held against NumPy in the closed-form and recomputation tests)."""
     result = run_survey(SPECS, samples=12, seed=3, chunk_size=5, workers=2, trajectories=RUNS)
     _same(result, serial)
 
 
 def test_dask_local_cluster_gives_identical_results(serial):
+    """Regression test: a Dask cluster reproduces the serial survey bit for bit."""
     from distributed import LocalCluster  # the `dask` extra, also in the `test` extra
 
     with LocalCluster(

@@ -24,8 +24,12 @@ from gimwatch.denoc import DenocModel
 from gimwatch.metrics.tracker import KappaTracker
 from gimwatch.model.robots import load_robot
 
-#: The tracker's documented accuracy is rtol = 1e-10 per end; the acceptance bound is 1e-8.
-BOUND = 1e-8
+#: The tracker's documented accuracy is rtol = 1e-10 per end (κ to about 2e-10): κ is held to
+#: 5e-10, a margin of 2.5 for the reference's round-off (measured errors up to 8.7e-11 on
+#: these trees, κ up to 4e8, crossings included).
+BOUND = 5e-10
+#: Each end stops when its Kato–Temple estimate is at most rtol: κ's estimate is their sum.
+ESTIMATE_BOUND = 2 * 1e-10
 
 
 def y_tree_urdf(links_per_branch: int, mass_kg: float = 2.2, length_m: float = 1.0) -> str:
@@ -117,7 +121,7 @@ def test_each_samples_fallback_and_error_bound_reach_the_series_and_results(tmp_
     labels = list(arrays["watch_kappa_tracked_fallback"])
     assert labels[0] == "start" and set(labels) <= {"start", "", "cold", "dense"}
     bounds = arrays["watch_kappa_tracked_error_estimate"]
-    assert bounds.shape == (41,) and np.all((bounds >= 0) & (bounds < 1e-8))
+    assert bounds.shape == (41,) and np.all((bounds >= 0) & (bounds <= ESTIMATE_BOUND))
     scene = tmp_path / "scene.toml"
     scene.write_text(
         'robot = "chain:12"\nduration = 0.1\nsample = 0.02\nq = 0.1\n'

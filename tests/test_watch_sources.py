@@ -58,10 +58,12 @@ def test_mujoco_m_in_robot_coordinates_is_gimwatch_crba(spec, floating):
 
 
 def test_a_pinocchio_model_maps_like_its_robot():
-    robot, model, data, _ = _pair(mjcf_path("solo12"), True)
+    robot, model, data, q = _pair(mjcf_path("solo12"), True)
     from_robot = MujocoSource(model, data, robot=robot).gim()
     from_model = MujocoSource(model, data, robot=robot.model).gim()
     np.testing.assert_array_equal(from_model, from_robot)
+    reference = gim(robot, q)  # Pinocchio's CRBA: the mapping is right, not only the same
+    np.testing.assert_allclose(from_model, reference, rtol=0, atol=1e-12 * np.abs(reference).max())
 
 
 def test_armature_is_on_the_diagonal_and_can_be_removed():

@@ -123,10 +123,10 @@ def remove_stale(target: Path, *, keep: Path) -> None:
     """Clear what a killed writer of ``target`` left (we hold its lock).
 
     Its staging folders are removed; a previous folder it had moved aside (the two-rename
-    swap) is put back when nothing took its place, else removed. Only folders a writer made
-    are touched: a staging folder holds its record, a folder moved aside holds the staging
-    record too (swap writes it before the rename); anything else with such a name is the
-    user's and is left alone.
+    swap) is put back, without the record, when nothing took its place, else removed. Only
+    folders a writer made are touched: a staging folder holds its record, a folder moved aside
+    holds the staging record too (swap writes it before the rename); anything else with such a
+    name is the user's and is left alone.
     """
     prefixes = (f".{target.name}{STAGING}", f".{target.name}{OLD}")
     try:
@@ -141,6 +141,8 @@ def remove_stale(target: Path, *, keep: Path) -> None:
             if OLD in entry.name and not os.path.lexists(target):
                 try:
                     os.rename(entry.path, target)
+                    # as it was: a record left in it would make the next fallback swap fail
+                    (target / STAGING_RECORD).unlink(missing_ok=True)
                     continue
                 except OSError:
                     pass
