@@ -194,3 +194,17 @@ def test_matrix_watch_spectrum_matches_numpy_scaled_or_not(nv):
     d = numpy.diag(M)
     numpy.testing.assert_allclose(watch.array("diagonal_ratio"), d.max() / d.min(), rtol=1e-14)
     numpy.testing.assert_allclose(watch.array("diagonal")[0], d, rtol=0)
+
+
+def test_a_watch_on_a_chain_too_long_for_pinocchios_data_runs_on_denoc():
+    """chain:600 (Data would need GBs): δ from DeNOC against the closed-form rod chain's M."""
+    from closed_forms import rod_chain_gim
+
+    robot = load_robot("chain:600")
+    watch = Watch(robot, ("diagonal_ratio",))
+    assert watch.data is None
+    q = np.random.default_rng(3).uniform(-0.5, 0.5, 600)
+    watch.sample(0.0, q)
+    diagonal = np.diag(rod_chain_gim(q))
+    expected = diagonal.max() / diagonal.min()
+    assert watch.arrays()["watch_diagonal_ratio"][0] == pytest.approx(expected, rel=1e-12)

@@ -137,7 +137,6 @@ class Watch(CompiledSampling, SeriesViews):
         self.dof_names = robot.dof_names if robot is not None else tuple(dynamics.dof_names)
         self.metrics = {name: METRICS[name]() for name in names}
         self.full = any(m.full for m in self.metrics.values())
-        self.data = robot.new_data() if self.metrics and dynamics is None and robot else None
         # diag M by one compiled DeNOC call (preallocated buffers) when M itself is not needed
         # (a source's own diag M and δ when it has them: MuJoCo's sparse M, a held matrix)
         self.lean = None
@@ -150,6 +149,11 @@ class Watch(CompiledSampling, SeriesViews):
             from gimwatch.metrics.tracker.providers import lean_model
 
             self.lean = lean_model(robot, dynamics)
+        # Pinocchio's Data (memory ∝ nv³) unless DeNOC serves a robot too long for it
+        needs_data = self.metrics and dynamics is None and robot is not None
+        if needs_data and self.lean is not None and robot.nv > DATA_NV_LIMIT:
+            needs_data = False  # a metric that still needs Data says so when it runs
+        self.data = robot.new_data() if needs_data else None
         self._set_alarm(alarm_metric, alarm_threshold, on_alarm, warn)
         self._check_q = robot is not None and dynamics is None
         self._given = None
