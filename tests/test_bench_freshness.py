@@ -32,7 +32,6 @@ def test_the_bench_tables_are_found():
 def test_a_bench_table_is_not_older_than_the_code_it_measured(path):
     record = json.loads(path.read_text(encoding="utf-8"))
     assert FINGERPRINT_KEY in record, f"{path}: no fingerprint; regenerate it (make bench)"
-    modules = record[FINGERPRINT_KEY]["modules"]
-    assert any(name.startswith("gimwatch/bench/") for name in modules)  # its section's module
+    assert record[FINGERPRINT_KEY]["modules"], f"{path}: an empty fingerprint"
     stale = stale_modules(record[FINGERPRINT_KEY], ROOT)
     assert not stale, f"{path} predates changes to {stale}: regenerate it (make bench)"
