@@ -47,7 +47,8 @@ bench: setup
 	$(PY) -m pip install --quiet -c constraints.txt -e '.[test,notebooks,docs,pandas]'
 	$(VENV)/bin/gimwatch bench conditioning estimators accuracy dynamics integrators longchain \
 		tighten -o benchmarks --page docs/findings/accuracy-costs.md
-	$(VENV)/bin/gimwatch bench lean tracker denoc watch -o benchmarks/cost
+	$(VENV)/bin/gimwatch bench lean tracker denoc watch -o benchmarks/cost \
+		--page docs/findings/accuracy-costs.md
 	$(PY) -m gimwatch.bench.cost_page docs/findings/cost.md benchmarks/cost
 	$(VENV)/bin/gimwatch bench watch_mujoco -o benchmarks/watch_mujoco
 	$(VENV)/bin/gimwatch bench watch_overhead -o benchmarks/watch_overhead

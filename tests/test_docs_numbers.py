@@ -1005,12 +1005,14 @@ def test_bench_block_tables_are_the_committed_csv_files():
         "amortized (1 per 10 steps)": "amortized",
         "sample / aba call": "sample_vs_aba_call",
     }
-    table = _block_table("Cost of the watch per step")
-    assert [(row["n"], row["watch"]) for row in table] == list(watch)
+    table = _block_table("Cost of the watch per step")  # the headline: the largest n's rows
+    assert table and {(row["n"], row["watch"]) for row in table} <= set(watch)
     for row in table:
         for header, key in columns.items():
             source = watch[(row["n"], row["watch"])]
-            assert row[header] == _g3(source[key]), (row["n"], row["watch"], header)
+            # the block rounds the run's float, the CSV keeps 6 digits: 3 digits either way
+            quoted, value = float(row[header]), float(source[key])
+            assert quoted == pytest.approx(value, rel=6e-3, abs=1e-12), (row["n"], header)
 
     denoc = {(r["n"], r["quantity"]): r for r in _csv("cost/denoc.csv")}
     table = _block_table("DeNOC vs Pinocchio cost")
@@ -1034,7 +1036,8 @@ def test_bench_block_sentences_are_the_committed_summary():
     summary = json.loads((BENCH / "summary.json").read_text())["sections"]
     page = "docs/findings/accuracy-costs.md"
     accuracy = summary["accuracy"]
-    match = _find(page, r"median and worst over all chains: `denoc` ([\d.e-]+) / ([\d.e-]+);")
+    _find(page, r"median and worst over all chains: `")  # methods in order of their median
+    match = _find(page, r"`denoc` ([\d.e-]+) / ([\d.e-]+)[;.]")
     assert list(match.groups()) == [
         f"{accuracy['median_error_over_kappa_eps']['denoc']:.2g}",
         f"{accuracy['worst_error_over_kappa_eps']['denoc']:.2g}",
@@ -1185,12 +1188,12 @@ def test_tracker_prose_is_the_committed_cost_run():
     assert all(ratio < 1 for ratio in ratios.values())
     _find(page, r"\(n = 20 to\s+400\)")
     assert min(ratios) == 20 and max(ratios) == 400
-    _find(page, r"to under a fiftieth of the dense cost at 400 links")
-    assert ratios[400] < 1 / 50
-    match = _find(page, r"for (\d+)–(\d+) O\(n\) products and one O\(n\) factorization")
+    _find(page, r"to under a thirtieth of the dense cost at 400 links")
+    assert ratios[400] < 1 / 30
+    match = _find(page, r"for (\d+)–(\d+) O\(n\) products and two O\(n\) factorizations")
     medians = [float(r["products_median"]) for r in rows]
     assert [int(match.group(1)), int(match.group(2))] == [min(medians), max(medians)]
-    assert all(float(r["factors_median"]) == 1 for r in rows)
+    assert all(float(r["factors_median"]) == 2 for r in rows)  # the shift, the certificate
 
 
 def test_bench_block_work_precision_table_is_the_committed_csv():

@@ -136,6 +136,11 @@ def run_bench(
     Raises:
         InputError: An unknown section, or one whose module cannot be imported.
     """
+    # SciPy's own OpenBLAS (the LAPACK numba's eigvalsh calls, in the watch's κ kernel) is
+    # loaded now, so that the sections' threadpool_limits(1) pins it too: a library loaded
+    # inside such a block keeps all its threads (2 here: a 35 x 35 solve 1.3x slower).
+    import scipy.linalg.cython_lapack  # noqa: F401
+
     from gimwatch.bench.freshness import fingerprint, loaded_modules
     from gimwatch.bench.report import environment, update_readme, write_report, write_section
 

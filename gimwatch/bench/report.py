@@ -37,6 +37,18 @@ __all__ = [
 README_START, README_END = "<!-- bench:start -->", "<!-- bench:end -->"
 
 
+def page_markers(text: str, output: str | Path) -> tuple[str, str]:
+    """The markers of the block a run into ``output`` regenerates in a page's ``text``.
+
+    ``<!-- bench:NAME:start -->`` / ``<!-- bench:NAME:end -->`` (NAME the output folder's
+    name) when the page has them, so that one page can hold the blocks of several folders;
+    else `README_START` / `README_END`.
+    """
+    name = Path(output).name
+    start, end = f"<!-- bench:{name}:start -->", f"<!-- bench:{name}:end -->"
+    return (start, end) if start in text and end in text else (README_START, README_END)
+
+
 def _version(package: str) -> str:
     try:
         return version(package)
@@ -142,6 +154,8 @@ def write_report(
 def update_readme(readme: Path, env: dict, results: list[SectionResult], output: Path) -> Path:
     """Replace the block between the bench markers in a Markdown page with the headlines.
 
+    The markers are those of `page_markers`: a folder's own block when the page has one.
+
     The page is a docs page (``docs/findings/accuracy-costs.md``) or a README. Figures are
     linked by a path relative to the page; from a docs page they go through the folder's link
     in ``docs/`` (``docs/benchmarks`` → ``benchmarks``) when there is one, so that MkDocs
@@ -151,15 +165,14 @@ def update_readme(readme: Path, env: dict, results: list[SectionResult], output:
         InputError: The page lacks the ``<!-- bench:start -->``/``<!-- bench:end -->`` markers.
     """
     text = readme.read_text(encoding="utf-8")
-    pattern = re.compile(re.escape(README_START) + r".*?" + re.escape(README_END), re.DOTALL)
+    start, end = page_markers(text, output)
+    pattern = re.compile(re.escape(start) + r".*?" + re.escape(end), re.DOTALL)
     if not pattern.search(text):
-        raise InputError(
-            f"{readme}", f"a file with {README_START} and {README_END} markers", "no markers"
-        )
+        raise InputError(f"{readme}", f"a file with {start} and {end} markers", "no markers")
     prefix = _figure_prefix(readme, output)
     blas = env["blas_threads"]
     body = [
-        README_START,
+        start,
         f"Measured by `make bench` ({env['date']}; {env['cpu']}; Pinocchio {env['pinocchio']}, "
         f"NumPy {env['numpy']}, SciPy {env['scipy']}; BLAS on one thread — on "
         f"{blas['threads_all']} threads a {blas['n']}x{blas['n']} `eigvalsh` was "
@@ -172,7 +185,7 @@ def update_readme(readme: Path, env: dict, results: list[SectionResult], output:
             continue  # no empty headings
         body += [f"## {result.title}", "", result.headline.strip(), ""]
         body += [f"![{f.stem}]({prefix}{f.name})" for f in result.figures[:1]] + [""]
-    body.append(README_END)
+    body.append(end)
     new = pattern.sub(lambda _: "\n".join(body), text)
     return write_text_atomic(readme, new)
 

@@ -40,22 +40,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="FILE",
         help="regenerate the block between the bench markers of this Markdown page "
-        "(make bench: docs/findings/accuracy-costs.md)",
+        "(<!-- bench:DIR:start/end --> for output folder DIR when it has them, else "
+        "<!-- bench:start/end -->; make bench: docs/findings/accuracy-costs.md)",
     )
 
 
-def _check_page(page: Path) -> None:
+def _check_page(page: Path, output: str) -> None:
     """The page --page regenerates must exist and hold the bench markers."""
-    from gimwatch.bench.report import README_END, README_START
+    from gimwatch.bench.report import page_markers
 
     try:
         text = page.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise OutputError(str(page), f"cannot be read ({exc.__class__.__name__})") from exc
-    if README_START not in text or README_END not in text:
-        raise InputError(
-            f"{page}", f"a file with {README_START} and {README_END} markers", "no markers"
-        )
+    start, end = page_markers(text, output)
+    if start not in text or end not in text:
+        raise InputError(f"{page}", f"a file with {start} and {end} markers", "no markers")
 
 
 def _progress(line: str) -> None:
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     which = ["all"] if "all" in args.which else args.which
     if args.page is not None:
-        _check_page(Path(args.page))  # before the sections run, not after
+        _check_page(Path(args.page), args.output)  # before the sections run, not after
     report = run_bench(
         which,
         args.output,
