@@ -204,6 +204,14 @@ MUTANTS = (
         ("tests/test_denoc_input.py",),
         "a continuous joint written as a revolute one: DeNOC reads (cos θ, sin θ) as two angles",
     ),
+    Mutant(
+        "spectrum-solver-unscaled",
+        "gimwatch/model/spectrum_solver.py",
+        "M = M * (1.0 / scale)",
+        "M = M * scale",
+        ("tests/test_spectrum_solver.py",),
+        "the watch's LAPACK path (n > 32) scales M the wrong way: overflow on huge entries",
+    ),
     # --- mpmath references ---
     Mutant(
         "planar-reference-30-digits",

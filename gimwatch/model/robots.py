@@ -79,6 +79,13 @@ DATA_NV_LIMIT = 400
 MAX_TREE_DEPTH = 2000
 
 
+def _own_free_root(model: pin.Model) -> bool:
+    """Joint 1 is a free-flyer and every other joint hangs below it (one floating tree)."""
+    if model.njoints < 2 or "FreeFlyer" not in model.joints[1].shortname():
+        return False
+    return all(model.parents[k] != 0 for k in range(2, model.njoints))
+
+
 @dataclass(frozen=True, eq=False)
 class Robot:
     """A kinematic tree ready for dynamics.
@@ -95,6 +102,10 @@ class Robot:
         mjcf_body: For MJCF, the body whose subtree was selected ("" for the whole model).
         mjcf_armature: For MJCF, whether MuJoCo's ``dof_armature`` is in M (as in MuJoCo).
         mujoco_joints: For MJCF, MuJoCo's joint id of each Pinocchio joint, else ().
+        dof_names: One name per velocity coordinate (``joint[k]`` for a joint of several).
+        free_base: Whether the whole tree moves on one free joint at its root: the
+            free-flyer gimwatch added (``floating``) or, in an MJCF file, the file's own free
+            joint when no other tree hangs from the world (set once: read every sample).
     """
 
     name: str
@@ -109,6 +120,7 @@ class Robot:
     mjcf_armature: bool = True
     mujoco_joints: tuple[int, ...] = ()
     dof_names: tuple[str, ...] = field(init=False)
+    free_base: bool = field(init=False)
 
     def __post_init__(self) -> None:
         names = []
@@ -118,6 +130,7 @@ class Robot:
             else:
                 names.extend(f"{joint_name}[{k}]" for k in range(joint.nv))
         object.__setattr__(self, "dof_names", tuple(names))
+        object.__setattr__(self, "free_base", self.floating or _own_free_root(self.model))
 
     def __repr__(self) -> str:  # the model and the URDF text would fill a screen
         base = "floating" if self.free_base else "fixed"
@@ -125,20 +138,6 @@ class Robot:
             f"Robot(name={self.name!r}, spec={self.spec!r}, nq={self.nq}, nv={self.nv}, "
             f"base={base!r}, source={self.source!r})"
         )
-
-    @property
-    def free_base(self) -> bool:
-        """Whether the whole tree moves on one free joint at its root.
-
-        The free-flyer gimwatch added (`floating`) or, in an MJCF file, the file's own free
-        joint when no other tree hangs from the world.
-        """
-        model = self.model
-        if self.floating:
-            return True
-        if model.njoints < 2 or "FreeFlyer" not in model.joints[1].shortname():
-            return False
-        return all(model.parents[k] != 0 for k in range(2, model.njoints))
 
     @property
     def nq(self) -> int:

@@ -1,9 +1,11 @@
 """The watch's compiled sample path: the arithmetic and nothing else, checks folded in.
 
-κ is one scaled eigen-solve (a NaN or non-positive λmin sends the sample to the checked path,
-which names the problem: the checks cost nothing on a good M), δ one compiled call on the
-diagonal. `CompiledSampling` is a part of [`Watch`][gimwatch.watch.watch.Watch]: it
-reads the watch's metric names, robot, Data, MuJoCo buffer and kernels.
+κ is one scaled eigen-solve by the solver fastest at the watch's size
+([`SpectrumSolver`][gimwatch.model.spectrum_solver.SpectrumSolver]; a NaN or non-positive λmin
+sends the sample to the checked path, which names the problem: the checks cost nothing on a
+good M), δ one compiled call on the diagonal. `CompiledSampling` is a part of
+[`Watch`][gimwatch.watch.watch.Watch]: it reads the watch's metric names, robot, Data, MuJoCo
+buffer, solver and kernels.
 """
 
 from __future__ import annotations
@@ -13,15 +15,10 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.registry import GimState
 from gimwatch.watch.sources import MujocoSource
 
-__all__ = ["CRBA_DIAGONAL_MAX_NV", "NUMPY_EIG_MIN_NV", "CompiledSampling"]
-
-#: Above this nv a κ-only watch solves with NumPy's ``eigvalsh`` (after the compiled scale
-#: check): its LAPACK build beats the one numba calls there, and its wrapper's µs no longer count.
-NUMPY_EIG_MIN_NV = 24
+__all__ = ["CRBA_DIAGONAL_MAX_NV", "CompiledSampling"]
 
 #: Up to this nv, δ of a ``pinocchio.Model`` without URDF reads CRBA's diagonal (C++, O(n²))
 #: rather than the O(n) centroidal map, whose Python around Pinocchio costs more.
@@ -34,32 +31,22 @@ class CompiledSampling:
     def _fast_values(self, source, q) -> list | None:
         """The watched values by the compiled path, or None: then the checked path decides.
 
-        κ: one scaled eigen-solve (`scaled_spectrum`); a NaN or
+        κ: one scaled eigen-solve (the watch's `SpectrumSolver`); a NaN or
         non-positive λmin sends the sample to the checked path, which names the problem, so
         the checks cost nothing on a good M. δ: one compiled call on the diagonal.
         """
-        if not self._fast:
-            return None
-        try:
-            return self._compiled_values(source, q)
-        except np.linalg.LinAlgError:  # NaN in M reached LAPACK: the checked path says where
-            return None
+        return self._compiled_values(source, q) if self._fast else None
 
     def _compiled_values(self, source, q) -> list | None:
-        if self._only_kappa and self.nv > NUMPY_EIG_MIN_NV:  # NumPy's LAPACK is faster there
-            M = self._gim(source, q)
-            scale = self._kernels.spectrum_scale(M)
-            if not scale > 0.0:
-                return None
-            values = np.linalg.eigvalsh(M if scale == 1.0 else M * (1.0 / scale))
-            value = extreme_ratio(values)
-            return [value] if value >= 1.0 else None
         if self._only_kappa:
-            value = self._kernels.spectrum_ratio(self._gim(source, q))
+            value = self._solver.ratio(self._gim(source, q))
             return [value] if value >= 1.0 else None  # NaN: the checked path names why
         if self.full:
             M = self._gim(source, q)
-            spectrum, scale = self._kernels.scaled_spectrum(M)
+            solved = self._solver.scaled(M)
+            if solved is None:
+                return None
+            spectrum, scale = solved
             low = spectrum[0]
             if not low > 0.0:
                 return None

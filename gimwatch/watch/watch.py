@@ -165,9 +165,11 @@ class Watch(CompiledSampling, SeriesViews):
         self._fast = bool(self.metrics) and FAST_METRICS.issuperset(self.metrics)
         self._names = tuple(self.metrics)
         from gimwatch.model import kernels  # numba, imported when a watch is built, not before
+        from gimwatch.model.spectrum_solver import SpectrumSolver
 
         self._kernels = kernels
         self._only_kappa = self._names == ("kappa",)
+        self._solver = SpectrumSolver(self.nv) if self._fast and self.full else None
         self._blocks = (*unit_blocks(robot), robot.nq) if self._check_q else None
         self._matrix_watch = isinstance(dynamics, GivenMatrix)
         self._reads_state = bool(getattr(dynamics, "reads_state", False))
