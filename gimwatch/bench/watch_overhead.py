@@ -17,6 +17,11 @@ A second table (``watch_tracker``): on the paper's rod chains of n links moved s
 (``kappa``: CRBA + the compiled eigen-solve) against the O(n) tracker (``kappa_tracked``),
 to say from which n the tracker pays.
 
+A third table (``watch_solver``): the watch's dense eigen-solve
+([`SpectrumSolver`][gimwatch.model.spectrum_solver.SpectrumSolver]) against NumPy's
+``eigvalsh`` on one symmetric positive definite matrix per size, across the sizes where the
+solver changes (the numba kernel, ``dsyevd`` with its minimal then its optimal workspace).
+
 Columns: ``bare_us``, ``watch_us``, ``step_us`` (medians, µs), ``watch_vs_bare`` and
 ``watch_vs_step`` (medians of the per-round ratios).
 """
@@ -34,15 +39,36 @@ from gimwatch.bench.report import markdown_table
 from gimwatch.metrics.tracker.providers import lean_model
 from gimwatch.model.mujoco_model import compile_robot
 from gimwatch.model.robots import load_robot
+from gimwatch.model.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV, SpectrumSolver
 from gimwatch.watch.watch import Watch
 
-__all__ = ["CHAIN_SIZES", "COLUMNS", "ROBOTS", "TRACKER_COLUMNS", "run"]
+__all__ = [
+    "CHAIN_SIZES",
+    "COLUMNS",
+    "ROBOTS",
+    "SOLVER_COLUMNS",
+    "SOLVER_SIZES",
+    "TRACKER_COLUMNS",
+    "run",
+]
 
 #: (spec, floating base): a 7-DoF arm, a quadruped and a humanoid on free joints.
 ROBOTS = (("xarm7", False), ("solo12", True), ("g1", True))
 #: Chain sizes (links) of the tracker table.
 CHAIN_SIZES = (10, 20, 30, 50, 100)
 TRACKER_COLUMNS = ("n", "samples", "dense_us", "tracked_us", "tracked_vs_dense")
+#: Matrix sizes of the solver table: each side of each switch of `SpectrumSolver`.
+SOLVER_SIZES = (
+    7,
+    20,
+    COMPILED_MAX_NV,
+    COMPILED_MAX_NV + 1,
+    50,
+    UNBLOCKED_MAX_NV,
+    UNBLOCKED_MAX_NV + 1,
+    200,
+)
+SOLVER_COLUMNS = ("n", "solver", "numpy_us", "solver_us", "solver_vs_numpy")
 COLUMNS = (
     "robot",
     "nv",
@@ -201,11 +227,47 @@ def measure_tracker(context: BenchContext) -> Table:
     return table
 
 
+def _solver_name(n: int) -> str:
+    if n <= COMPILED_MAX_NV:
+        return "numba kernel"
+    return "dsyevd, minimal workspace" if n <= UNBLOCKED_MAX_NV else "dsyevd, optimal workspace"
+
+
+def measure_solver(context: BenchContext) -> Table:
+    """One row per size: the watch's eigen-solve against ``numpy.linalg.eigvalsh``."""
+    rounds = 2 if context.quick else 7
+    sizes = SOLVER_SIZES[2:4] if context.quick else SOLVER_SIZES
+    table = Table("watch_solver", SOLVER_COLUMNS)
+    rng = np.random.default_rng(context.seed)
+    for n in sizes:
+        A = rng.standard_normal((n, n))
+        M = A @ A.T + n * np.eye(n)
+        solver = SpectrumSolver(n)
+        calls = max(10, min(2000, 200_000 // n**2))
+        numpy_call = lambda M=M: np.linalg.eigvalsh(M)  # noqa: E731 - timed as written
+        solver_call = lambda M=M, solver=solver: solver.ratio(M)  # noqa: E731
+        numpy_call(), solver_call()
+        numpy_s, solver_s = [], []
+        for _ in range(rounds):
+            numpy_s.append(_per_call_s(numpy_call, calls))
+            solver_s.append(_per_call_s(solver_call, calls))
+        numpy_s, solver_s = np.asarray(numpy_s), np.asarray(solver_s)
+        table.add(
+            n=n,
+            solver=_solver_name(n),
+            numpy_us=float(np.median(numpy_s)) * 1e6,
+            solver_us=float(np.median(solver_s)) * 1e6,
+            solver_vs_numpy=float(np.median(solver_s / numpy_s)),
+        )
+    return table
+
+
 def run(context: BenchContext) -> SectionResult:
     """Measure the watch's sample against the bare computation and the loop's step."""
     with threadpool_limits(limits=1, user_api="blas"):
         table = measure(context)
         tracker = measure_tracker(context)
+        solver = measure_solver(context)
     columns = {
         "robot": "robot",
         "nv": "nv",
@@ -239,6 +301,20 @@ def run(context: BenchContext) -> SectionResult:
                 "tracked_vs_dense": "tracked / dense",
             },
         ),
+        "",
+        "The watch's dense eigen-solve (`SpectrumSolver`, κ of one matrix) against NumPy's "
+        "`eigvalsh` on a symmetric positive definite matrix of each size, ratios within a round.",
+        "",
+        markdown_table(
+            solver.rows,
+            {
+                "n": "n",
+                "solver": "watch's solver",
+                "numpy_us": "NumPy eigvalsh (µs)",
+                "solver_us": "watch's solve (µs)",
+                "solver_vs_numpy": "watch / NumPy",
+            },
+        ),
     ]
     worst = {
         m: max(r["watch_vs_bare"] for r in table.rows if r["metric"] == m)
@@ -247,7 +323,7 @@ def run(context: BenchContext) -> SectionResult:
     return SectionResult(
         name="watch_overhead",
         title="The watch sample against the bare computation",
-        tables=[table, tracker],
+        tables=[table, tracker, solver],
         markdown="\n".join(text),
         headline="\n".join(text),
         summary={f"{m}_watch_vs_bare_max": v for m, v in worst.items()},
