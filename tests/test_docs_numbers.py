@@ -1236,7 +1236,22 @@ def test_watch_page_quotes_the_committed_watch_overhead_run():
         rf"{ratio('xarm7', 'pinocchio', 'kappa')}× `pin.crba` \+ `eigvalsh` and "
         rf"{ratio('xarm7', 'pinocchio', 'delta')}× the O\(n\) diagonal",
     )
-    _find("docs/watch.md", rf"{ratio('g1', 'mujoco', 'kappa', 'watch_vs_step')} `mj_step`s")
+    _find(
+        "docs/watch.md",
+        rf"{ratio('g1', 'mujoco', 'kappa', 'watch_vs_step')} `mj_step`s "
+        rf"\({ratio('g1', 'mujoco', 'kappa')}× the bare `mj_fullM` \+ `eigvalsh`\)",
+    )
+    solver = {int(r["n"]): r for r in _csv("watch_overhead/watch_solver.csv")}
+    from gimwatch.model.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV
+
+    first, last = COMPILED_MAX_NV + 1, UNBLOCKED_MAX_NV
+    assert solver[first]["solver"] == "dsyevd, minimal workspace" == solver[last]["solver"]
+    _find(
+        "docs/watch.md",
+        rf"solve costs {float(solver[first]['solver_vs_numpy']):.2f}× NumPy's at n = {first} and "
+        rf"{float(solver[last]['solver_vs_numpy']):.2f}× at n = {last}, where",
+    )
+    _find("docs/watch.md", rf"the numba kernel up to n = {COMPILED_MAX_NV} and above it")
     tracker = {
         int(r["n"]): float(r["tracked_vs_dense"]) for r in _csv("watch_overhead/watch_tracker.csv")
     }
