@@ -90,6 +90,16 @@ def test_import_gimwatch_is_lazy_and_every_public_name_resolves():
         gimwatch.lod_robot  # noqa: B018
 
 
+def test_the_public_api_holds_the_entry_points_the_docs_use():
+    # analyze and the tracker are documented and used from Python; they are public names
+    for name in ("analyze", "KappaTracker", "TrackedKappa", "track_kappa"):
+        assert name in gimwatch.__all__, name
+    assert gimwatch.analyze is importlib.import_module("gimwatch.metrics.analyze").analyze
+    tracker = importlib.import_module("gimwatch.metrics.tracker")
+    assert gimwatch.KappaTracker is tracker.KappaTracker
+    assert gimwatch.track_kappa is tracker.track_kappa
+
+
 def test_robots_lists_every_example_robot(capsys):
     code, out, _ = run(capsys, "robots", "--json")
     rows = {r["name"]: r for r in json.loads(out)["robots"]}
