@@ -151,6 +151,11 @@ def test_mistyped_metric_names_get_a_suggestion(capsys):
 
     assert did_you_mean("kapa", ["kappa", "rcond"]) == "; did you mean 'kappa'?"
     assert did_you_mean("frobnicate", ["kappa", "rcond"]) == ""
+    # case is not a typo: UR5 is ur5, and the suggestion keeps the choice's own spelling
+    assert did_you_mean("UR5", ["ur5", "ur10"]) == "; did you mean 'ur5'?"
+    assert did_you_mean("Chain_10", ["chain_10", "chain_20"]).startswith(
+        "; did you mean 'chain_10'"
+    )
     with pytest.raises(gimwatch.SceneError) as error:
         gimwatch.parse_scene(
             {"robot": "chain:3", "duration": 1, "sample": 0.1, "watch": {"metrics": ["kapa"]}},
