@@ -43,9 +43,13 @@ MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
 class Robot(Protocol):
     """What sampling reads of a `gimwatch.model.robots.Robot` (no import: no cycle)."""
 
-    name: str
-    nq: int
-    model: pin.Model
+    # read-only members: the Robot record is a frozen dataclass
+    @property
+    def name(self) -> str: ...
+    @property
+    def nq(self) -> int: ...
+    @property
+    def model(self) -> pin.Model: ...
 
 
 def unit_block_size(joint: pin.JointModel) -> int:
