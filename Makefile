@@ -20,6 +20,7 @@ demo: setup
 test: setup
 	$(PY) -W error -c "import gimwatch"
 	$(VENV)/bin/ruff check gimwatch tests
+	$(VENV)/bin/ruff format --check gimwatch tests
 	$(PY) -m pytest -n 2 --nbmake tests $(wildcard notebooks/*.ipynb)
 	$(MAKE) docs
 

@@ -37,6 +37,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.explain.modes import GimModes, gim_modes
     from gimwatch.explain.sensitivity import KappaSensitivities, Sensitivity, kappa_sensitivities
     from gimwatch.explain.trajectory import TrajectoryMetrics, trajectory_metrics
+    from gimwatch.metrics.analyze import analyze
     from gimwatch.metrics.conditioning import (
         ScaledDiagonalRatio,
         check_gim,
@@ -56,6 +57,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
         gim_operator,
         kappa_matrix_free,
     )
+    from gimwatch.metrics.tracker import KappaTracker, TrackedKappa, track_kappa
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
@@ -92,6 +94,7 @@ _EXPORTS: dict[str, str] = {
     "GimwatchWarning": "gimwatch.errors",
     "IllConditionedWarning": "gimwatch.errors",
     "InputError": "gimwatch.errors",
+    "KappaTracker": "gimwatch.metrics.tracker",
     "MatrixFreeKappa": "gimwatch.denoc.linear",
     "OutputError": "gimwatch.errors",
     "PlanarChainReference": "gimwatch.stress.reference_planar",
@@ -111,6 +114,7 @@ _EXPORTS: dict[str, str] = {
     "URDFError": "gimwatch.errors",
     "URDFWarning": "gimwatch.errors",
     "Watch": "gimwatch.watch.watch",
+    "analyze": "gimwatch.metrics.analyze",
     "analyze_configuration": "gimwatch.metrics.dense_analysis",
     "bundled_scenes": "gimwatch.simulation.bundled_scenes",
     "chain_spec": "gimwatch.model.chains",
@@ -142,6 +146,8 @@ _EXPORTS: dict[str, str] = {
     "run_stress": "gimwatch.stress.suite",
     "run_survey": "gimwatch.survey.run",
     "summarize": "gimwatch.simulation.results_folder",
+    "TrackedKappa": "gimwatch.metrics.tracker",
+    "track_kappa": "gimwatch.metrics.tracker",
     "udut_pivots": "gimwatch.metrics.conditioning",
     "write_chain_urdf": "gimwatch.model.chains",
     "write_simulation": "gimwatch.simulation.results_folder",
@@ -175,6 +181,7 @@ __all__ = [
     "IllConditionedWarning",
     "InputError",
     "KappaSensitivities",
+    "KappaTracker",
     "MatrixFreeKappa",
     "OutputError",
     "PlanarChainReference",
@@ -190,6 +197,7 @@ __all__ = [
     "SimulationError",
     "StressResult",
     "SurveyResult",
+    "TrackedKappa",
     "Trajectory",
     "TrajectoryMetrics",
     "TreeReference",
@@ -197,6 +205,7 @@ __all__ = [
     "URDFWarning",
     "Watch",
     "__version__",
+    "analyze",
     "analyze_configuration",
     "bundled_scenes",
     "chain_spec",
@@ -232,6 +241,7 @@ __all__ = [
     "run_stress",
     "run_survey",
     "summarize",
+    "track_kappa",
     "trajectory_metrics",
     "udut_pivots",
     "write_chain_urdf",

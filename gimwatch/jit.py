@@ -92,4 +92,4 @@ def _tolerate_cache_write_errors(dispatcher) -> None:
         except OSError:
             pass
 
-    cache.save_overload = save_or_skip
+    cache.save_overload = save_or_skip  # type: ignore[union-attr]  # save is not None

@@ -1,5 +1,6 @@
 import csv
 import importlib
+import importlib.util
 import io
 import json
 
@@ -105,6 +106,30 @@ def test_unavailable_section_is_refused_by_name(tmp_path):
         return
     with pytest.raises(InputError, match=rf"^bench section '{missing[0]}' must be available"):
         run_bench([missing[0]], tmp_path, quick=True)
+
+
+def test_a_section_whose_package_is_missing_is_skipped_and_refused(monkeypatch, tmp_path):
+    # MuJoCo hidden from the finder, as on an install without the [peers] extra
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name == "mujoco" else real(name, *a)
+    )
+    needs = {name for name in SECTIONS if section_status(name) is not None}
+    assert needs == {"watch_mujoco", "watch_overhead"}
+    assert "mujoco" in section_status("watch_mujoco")
+    with pytest.raises(InputError, match=r"^bench section 'watch_mujoco' must be available"):
+        run_bench(["watch_mujoco"], tmp_path / "out", quick=True)
+    assert not (tmp_path / "out").exists()
+
+
+def test_every_section_needing_mujoco_imports_it():
+    # the declared requirement is the truth: a section that imports MuJoCo declares it
+    for name, section in SECTIONS.items():
+        source = importlib.util.find_spec(section.module).origin
+        text = open(source, encoding="utf-8").read()
+        uses = "import mujoco" in text or "from gimwatch.model.mujoco_model" in text
+        peer_optional = "mujoco_peer.available()" in text
+        assert uses == ("mujoco" in section.requires) or peer_optional, name
 
 
 def test_table_rejects_rows_without_its_columns():

@@ -90,6 +90,16 @@ def test_import_gimwatch_is_lazy_and_every_public_name_resolves():
         gimwatch.lod_robot  # noqa: B018
 
 
+def test_the_public_api_holds_the_entry_points_the_docs_use():
+    # analyze and the tracker are documented and used from Python; they are public names
+    for name in ("analyze", "KappaTracker", "TrackedKappa", "track_kappa"):
+        assert name in gimwatch.__all__, name
+    assert gimwatch.analyze is importlib.import_module("gimwatch.metrics.analyze").analyze
+    tracker = importlib.import_module("gimwatch.metrics.tracker")
+    assert gimwatch.KappaTracker is tracker.KappaTracker
+    assert gimwatch.track_kappa is tracker.track_kappa
+
+
 def test_robots_lists_every_example_robot(capsys):
     code, out, _ = run(capsys, "robots", "--json")
     rows = {r["name"]: r for r in json.loads(out)["robots"]}
@@ -141,6 +151,11 @@ def test_mistyped_metric_names_get_a_suggestion(capsys):
 
     assert did_you_mean("kapa", ["kappa", "rcond"]) == "; did you mean 'kappa'?"
     assert did_you_mean("frobnicate", ["kappa", "rcond"]) == ""
+    # case is not a typo: UR5 is ur5, and the suggestion keeps the choice's own spelling
+    assert did_you_mean("UR5", ["ur5", "ur10"]) == "; did you mean 'ur5'?"
+    assert did_you_mean("Chain_10", ["chain_10", "chain_20"]).startswith(
+        "; did you mean 'chain_10'"
+    )
     with pytest.raises(gimwatch.SceneError) as error:
         gimwatch.parse_scene(
             {"robot": "chain:3", "duration": 1, "sample": 0.1, "watch": {"metrics": ["kapa"]}},

@@ -132,3 +132,15 @@ def test_without_mujoco_an_mjcf_file_is_one_line_saying_what_to_install(
     assert main(["analyze", str(path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "pip install 'gimwatch[mjcf]'" in err
+
+
+def test_without_mujoco_every_entry_point_gives_the_one_install_hint(monkeypatch):
+    import sys
+
+    from gimwatch.model.mjcf_compiled import MUJOCO_INSTALL
+    from gimwatch.watch.sources import MujocoSource
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco raises ImportError
+    with pytest.raises(InputError, match=r"^a MuJoCo watch must be MuJoCo installed") as caught:
+        MujocoSource(object(), object())
+    assert MUJOCO_INSTALL in str(caught.value)

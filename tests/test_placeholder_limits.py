@@ -42,3 +42,27 @@ def test_survey_lists_the_replaced_limits_per_robot():
     assert np.all(drawn <= robot.model.upperPositionLimit) and np.all(
         drawn >= robot.model.lowerPositionLimit
     )
+
+
+def test_a_map_replaces_exactly_the_limits_random_draws_replace():
+    # one rule: a joint whose limits random_configurations replaces gets ±π / ±1 m in a map
+    from gimwatch.explain.maps import map_axes
+    from gimwatch.model.sampling import placeholder_limit_joints
+
+    cases = (
+        (str(SLIDER_ARM), ("slide", "shoulder")),
+        ("ur5", ("shoulder_pan_joint", "elbow_joint")),
+    )
+    seen = set()
+    for spec, pair in cases:
+        robot = load_robot(spec)
+        replaced = set(placeholder_limit_joints(robot))
+        _, index, units, limits, _ = map_axes(spec, "dense", pair)
+        for joint, unit, (lo, hi), i in zip(pair, units, limits, index, strict=True):
+            low, high = robot.model.lowerPositionLimit[i], robot.model.upperPositionLimit[i]
+            if joint in replaced:
+                assert (lo, hi) == ((-1.0, 1.0) if unit == "m" else (-np.pi, np.pi)), joint
+            else:
+                assert (lo, hi) == (low, high), joint
+            seen.add(joint in replaced)
+    assert seen == {True, False}  # both sides of the rule were exercised

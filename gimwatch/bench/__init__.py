@@ -1,8 +1,9 @@
 """What accuracy costs in time: the sections of ``gimwatch bench`` and the run that ties them.
 
 Each section is a module of this package with ``run(context) -> SectionResult``; the
-`SECTIONS` registry names them. A section whose module cannot be imported (an optional
-dependency missing) is reported as skipped by ``all`` and refused when asked for by name.
+`SECTIONS` registry names them, with the optional packages each one needs. A section whose
+optional package is not installed (MuJoCo for the MuJoCo loops) is reported as skipped by
+``all`` and refused when asked for by name.
 
 Every section writes fixed-column CSV/JSON tables and PNG plots into the output folder's
 staging copy as soon as it finishes; ``report.md`` is then written from the sections that
@@ -37,11 +38,16 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Section:
-    """A registered section: its name, heading and the module that runs it."""
+    """A registered section: its name, heading, the module that runs it, what it needs.
+
+    ``requires`` names the optional packages (import names) the section cannot run without;
+    a section that only adds a peer when one is installed (``integrators``) requires none.
+    """
 
     name: str
     title: str
     module: str
+    requires: tuple[str, ...] = ()
 
 
 #: The sections in report order; ``all`` runs those whose status is None.
@@ -71,11 +77,13 @@ SECTIONS: dict[str, Section] = {
             "watch_mujoco",
             "Cost of the watch in a MuJoCo loop",
             "gimwatch.bench.watch_mujoco",
+            requires=("mujoco",),
         ),
         Section(
             "watch_overhead",
             "The watch sample against the bare computation",
             "gimwatch.bench.watch_overhead",
+            requires=("mujoco",),
         ),
         Section("denoc", "DeNOC vs Pinocchio cost", "gimwatch.bench.denoc_section"),
         Section("explain", "Conditioning maps", "gimwatch.bench.explain_maps"),
@@ -95,18 +103,19 @@ SECTIONS: dict[str, Section] = {
 }
 
 
-def _importable(module: str) -> bool:
+def _installed(package: str) -> bool:
+    # find_spec locates the package without importing it (MuJoCo's import takes a second)
     try:
-        return importlib.util.find_spec(module) is not None
-    except ModuleNotFoundError:
+        return importlib.util.find_spec(package) is not None
+    except (ImportError, ValueError):
         return False
 
 
 def section_status(name: str) -> str | None:
     """None when section ``name`` can run, else why not (one line)."""
-    section = SECTIONS[name]
-    if not _importable(section.module):
-        return f"not available: cannot import {section.module}"
+    missing = [package for package in SECTIONS[name].requires if not _installed(package)]
+    if missing:
+        return f"not available: needs {', '.join(missing)} (pip install 'gimwatch[peers]')"
     return None
 
 

@@ -28,7 +28,7 @@ e_i, centre-of-mass offset d_i, angular velocity ω_i; ``six`` (N, 5, 6) = U_i, 
 c_i, bias wrench b_i, twist rate, wrench; ``block`` (N, 2, 6, 6) = M_i, composite /
 articulated M̃_i; ``scal`` (N, 2) = pivot D_i, u_i; ``root`` (7, 6) = the free-flyer's 6×6
 UDUᵀ factor (rows 0–5 U, row 6 D); ``comp`` (N, 10) = the composite mass, first moment and
-rotational inertia the diagonal needs. Conventions and equations as in `.compiled`
+rotational inertia the diagonal needs. Conventions and equations as in `.recursions`
 (Shah & Saha 2013, Eqs. 11–13; Saha's DeNOC; Featherstone's articulated-body algorithm).
 """
 

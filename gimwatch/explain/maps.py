@@ -32,6 +32,7 @@ from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.metrics.linear_analysis import LINEAR_METRICS
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, parse_chain_spec
+from gimwatch.model.sampling import is_real_limit
 from gimwatch.suggest import did_you_mean
 from gimwatch.survey.sweep import Task, run_sweep
 
@@ -214,7 +215,7 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
             prismatic = "P" in joint.shortname().replace("JointModel", "")[:1]
             units[jname] = "m" if prismatic else "rad"
             lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
-            if not (np.isfinite(lo) and np.isfinite(hi) and abs(lo) < 1e3 and abs(hi) < 1e3):
+            if not (is_real_limit(lo) and is_real_limit(hi)):
                 lo, hi = (-math.pi, math.pi) if not prismatic else (-1.0, 1.0)
             limits[jname] = (float(lo), float(hi))
         neutral = pin.neutral(model)

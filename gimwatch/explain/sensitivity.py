@@ -49,8 +49,14 @@ __all__ = [
 
 #: Eigenvalues closer than this (relative) to λmin or λmax are treated as one cluster.
 CLUSTER_RTOL = 1e-8
-_INERTIA_ENTRIES = (("Ixx", 0, 0), ("Ixy", 0, 1), ("Ixz", 0, 2), ("Iyy", 1, 1), ("Iyz", 1, 2))
-_INERTIA_ENTRIES += (("Izz", 2, 2),)
+_INERTIA_ENTRIES: tuple[tuple[str, int, int], ...] = (
+    ("Ixx", 0, 0),
+    ("Ixy", 0, 1),
+    ("Ixz", 0, 2),
+    ("Iyy", 1, 1),
+    ("Iyz", 1, 2),
+    ("Izz", 2, 2),
+)
 
 
 def _skew(x: np.ndarray) -> np.ndarray:

@@ -1,1 +1,4 @@
-"""Conditioning metrics of the GIM: κ, δ, pivots, matrix-free κ; one-shot analyses; the watch."""
+"""Conditioning metrics of the GIM: κ, δ, pivots, matrix-free κ, the κ tracker, one registry.
+
+The watch that samples this registry along a trajectory lives in `gimwatch.watch`.
+"""

@@ -236,7 +236,9 @@ class ScaledDiagonalRatio:
                     "the scaled diagonal ratio needs a full GIM to calibrate α first"
                 )
             self.calibrate(matrix_or_diagonal)
-        return self._alpha * diagonal_ratio(matrix_or_diagonal)
+        alpha = self._alpha
+        assert alpha is not None  # set by calibrate
+        return alpha * diagonal_ratio(matrix_or_diagonal)
 
     def __repr__(self) -> str:
         return f"ScaledDiagonalRatio(alpha={self._alpha!r})"

@@ -34,20 +34,28 @@ import pinocchio as pin
 from gimwatch.errors import InputError, URDFError
 from gimwatch.model.captured_output import captured_c_output
 
-__all__ = ["build_pinocchio_model", "compile_mjcf", "import_mujoco", "subtree_joints"]
+__all__ = [
+    "MUJOCO_INSTALL",
+    "build_pinocchio_model",
+    "compile_mjcf",
+    "import_mujoco",
+    "subtree_joints",
+]
 
 #: MuJoCo's joint types (mjtJoint): free, ball, slide, hinge.
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3
 
 
-def import_mujoco():
-    """The ``mujoco`` module, or one line saying which install brings it."""
+#: The one install hint for MuJoCo, whatever needs it (MJCF files, the peer, a MuJoCo watch).
+MUJOCO_INSTALL = "pip install 'gimwatch[mjcf]'"
+
+
+def import_mujoco(purpose: str = "MJCF reading"):
+    """The ``mujoco`` module, or one line saying what needed it and which install brings it."""
     try:
         import mujoco
     except ImportError:
-        raise InputError(
-            "MJCF reading", "MuJoCo installed (pip install 'gimwatch[mjcf]')", "not installed"
-        ) from None
+        raise InputError(purpose, f"MuJoCo installed ({MUJOCO_INSTALL})", "not installed") from None
     return mujoco
 
 

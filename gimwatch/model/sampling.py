@@ -12,6 +12,7 @@ import os
 from typing import Protocol
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
@@ -22,6 +23,7 @@ __all__ = [
     "MAX_RANDOM_WORK_VARIABLE",
     "PLACEHOLDER_LIMIT",
     "check_random_budget",
+    "is_real_limit",
     "placeholder_limit_joints",
     "placeholder_note",
     "random_configurations",
@@ -41,9 +43,13 @@ MAX_RANDOM_WORK_VARIABLE = "GIMWATCH_MAX_RANDOM_WORK"
 class Robot(Protocol):
     """What sampling reads of a `gimwatch.model.robots.Robot` (no import: no cycle)."""
 
-    name: str
-    nq: int
-    model: pin.Model
+    # read-only members: the Robot record is a frozen dataclass
+    @property
+    def name(self) -> str: ...
+    @property
+    def nq(self) -> int: ...
+    @property
+    def model(self) -> pin.Model: ...
 
 
 def unit_block_size(joint: pin.JointModel) -> int:
@@ -59,7 +65,9 @@ def unit_block_size(joint: pin.JointModel) -> int:
 PLACEHOLDER_LIMIT = 1e3
 
 
-def _is_real_limit(limit: np.ndarray) -> np.ndarray:
+def is_real_limit(limit: npt.ArrayLike) -> np.ndarray:
+    """True where a joint limit is real: finite and below `PLACEHOLDER_LIMIT` in magnitude."""
+    limit = np.asarray(limit, dtype=float)
     return np.isfinite(limit) & (np.abs(limit) < PLACEHOLDER_LIMIT)
 
 
@@ -75,7 +83,7 @@ def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
     names = []
     for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
         box = slice(joint.idx_q, joint.idx_q + joint.nq - unit_block_size(joint))
-        if not (np.all(_is_real_limit(lower[box])) and np.all(_is_real_limit(upper[box]))):
+        if not (np.all(is_real_limit(lower[box])) and np.all(is_real_limit(upper[box]))):
             names.append(name)
     return tuple(names)
 
@@ -140,8 +148,8 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
             if joint.shortname().startswith("JointModelR")
             else (_DEFAULT_TRANSLATION_M)
         )
-        lo = np.where(_is_real_limit(lower[box]), lower[box], -default)
-        hi = np.where(_is_real_limit(upper[box]), upper[box], default)
+        lo = np.where(is_real_limit(lower[box]), lower[box], -default)
+        hi = np.where(is_real_limit(upper[box]), upper[box], default)
         qs[:, box] = rng.uniform(lo, hi, size=(count, stop - unit - start))
         if unit:
             block = rng.standard_normal((count, unit))

@@ -73,11 +73,11 @@ def signals_held() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    pending: list[int] = []
+    pending: list[signal.Signals] = []
     previous = {}
     for signum in (signal.SIGINT, signal.SIGTERM):
         try:
-            previous[signum] = signal.signal(signum, lambda s, _: pending.append(s))
+            previous[signum] = signal.signal(signum, lambda s, _: pending.append(signal.Signals(s)))
         except (OSError, ValueError):  # pragma: no cover - no handlers here
             pass
     try:
@@ -190,5 +190,6 @@ def write_npz_atomic(path: str | Path, arrays: Mapping[str, np.ndarray]) -> Path
     import io
 
     buffer = io.BytesIO()
-    np.savez(buffer, **{k: np.asarray(v) for k, v in arrays.items()})
+    named: dict[str, Any] = {k: np.asarray(v) for k, v in arrays.items()}
+    np.savez(buffer, **named)
     return write_bytes_atomic(path, buffer.getvalue())

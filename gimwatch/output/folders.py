@@ -165,7 +165,7 @@ def _make_parents(folder: Path, shown: str) -> list[Path]:
         if folder.parent == folder:
             break
         folder = folder.parent
-    created = []
+    created: list[Path] = []
     for path in reversed(missing):
         try:
             path.mkdir()

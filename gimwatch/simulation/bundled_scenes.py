@@ -8,8 +8,9 @@ gets an error saying where the bundled scenes are and which of them are close.
 
 from __future__ import annotations
 
-import difflib
 from pathlib import Path
+
+from gimwatch.suggest import close_matches
 
 #: The folder of the bundled scene files (installed with the package, see pyproject.toml).
 SCENES_DIR = Path(__file__).resolve().parents[1] / "scenes"
@@ -48,7 +49,7 @@ def missing_scene_hint(spec: str | Path) -> str:
     """Where the bundled scenes are, and the ones whose names are close to ``spec``."""
     names = bundled_scenes()
     stem = Path(spec).name.removesuffix(".toml")
-    close = difflib.get_close_matches(stem, names, n=3, cutoff=0.6)
+    close = close_matches(stem, names, cutoff=0.6)
     hint = f"bundled scenes (name one without a path; in {SCENES_DIR}): {', '.join(names)}"
     if close:
         hint = f"did you mean {' or '.join(close)}? " + hint

@@ -323,7 +323,7 @@ def parse_scene(
     dynamics.check_keys({"backend"})
     integrator = read_integrator(reader.sub("integrator"))
     check_steps(source, integrator, duration)
-    if integrator.fixed_step:
+    if integrator.fixed_step and integrator.dt is not None:  # a fixed step always has its dt
         ratio = sample / integrator.dt
         if abs(ratio - round(ratio)) > 1e-9 * ratio:
             raise SceneError(

@@ -37,7 +37,7 @@ from gimwatch.simulation.alarm_actions import (
     RTOL_FLOOR,
 )
 from gimwatch.simulation.backends import make_backend
-from gimwatch.simulation.effects import CallableTorque, build_effects
+from gimwatch.simulation.effects import CallableTorque, Gravity, build_effects
 from gimwatch.simulation.integrators import INTEGRATORS, MIN_STEP_FRACTION
 from gimwatch.simulation.local_coordinates import LocalChart
 from gimwatch.simulation.scene import Scene
@@ -93,7 +93,8 @@ class Simulation:
         self.effects = build_effects(robot, scene.effects, source=scene.source)
         if torque_law is not None:
             self.effects.append(CallableTorque(robot, torque_law))
-        gravity = next((e.vector for e in self.effects if e.name == "gravity"), None)
+        # the gravity effect's vector (m/s²), read by the backends that apply gravity themselves
+        gravity = next((e.vector for e in self.effects if isinstance(e, Gravity)), None)
         self.gravity = gravity
         self.torque_effects = [e for e in self.effects if e.adds_torque]
         self.backend = make_backend(scene.backend, robot, gravity)

@@ -172,6 +172,5 @@ def planar_reference(
     dps: int = REFERENCE_DIGITS,
 ) -> np.ndarray:
     """q̈ of a planar rod chain at ``dps`` digits (see `PlanarChainReference`)."""
-    return PlanarChainReference(spec, gravity_m_s2=tuple(gravity_m_s2), dps=dps).forward_dynamics(
-        q, v, tau
-    )
+    gravity = (float(gravity_m_s2[0]), float(gravity_m_s2[1]))
+    return PlanarChainReference(spec, gravity_m_s2=gravity, dps=dps).forward_dynamics(q, v, tau)

@@ -21,6 +21,7 @@ against itself, and the planar closed form against
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import mpmath
 import numpy as np
@@ -173,7 +174,8 @@ class TreeReference:
     def _joints(self, q: np.ndarray):
         """Per body: motion transform from the parent, and the joint's subspace S (6 × k)."""
         tree = self.tree
-        X, S = [], []
+        X: list[Any] = []  # None for a fixed base's world: mpmath matrices as nested lists
+        S: list[Any] = []
         for i in range(tree.size):
             if i == 0:
                 if tree.floating:
@@ -209,7 +211,9 @@ class TreeReference:
     def _velocities(self, X, S, v: np.ndarray):
         """Body twists v_i, bias accelerations c_i = v_i × S q̇_i and joint rates q̇_i."""
         tree = self.tree
-        twist, bias, rates = [], [], []
+        twist: list[Any] = []
+        bias: list[Any] = []
+        rates: list[Any] = []
         for i in range(tree.size):
             if S[i] is None:
                 twist.append([mpmath.mpf(0)] * 6)
@@ -293,12 +297,14 @@ class TreeReference:
         with mpmath.workdps(self.dps):
             X, S = self._joints(q)
             twist, bias, _ = self._velocities(X, S, v)
-            IA = [None] * n
-            pA = [None] * n
+            IA: list[Any] = [None] * n
+            pA: list[Any] = [None] * n
             for i in range(n):
                 IA[i] = [row[:] for row in self._inertia[i]]
                 pA[i] = _cross_force(twist[i], _apply(self._inertia[i], twist[i]))
-            U, Dinv, u = [None] * n, [None] * n, [None] * n
+            U: list[Any] = [None] * n
+            Dinv: list[Any] = [None] * n
+            u: list[Any] = [None] * n
             for i in range(n - 1, -1, -1):
                 if S[i] is None:
                     continue
@@ -331,7 +337,7 @@ class TreeReference:
                 back = _apply_t(X[i], pa)
                 pA[p] = [x + y for x, y in zip(pA[p], back, strict=True)]
             qdd = [mpmath.mpf(0)] * self.nv
-            acc = [None] * n
+            acc: list[Any] = [None] * n
             for i in range(n):
                 if S[i] is None:
                     acc[i] = self._base_acceleration()

@@ -37,12 +37,12 @@ import pinocchio as pin
 from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import check_gim
 from gimwatch.model.denoc_input import urdf_of_model
+from gimwatch.model.mjcf_compiled import import_mujoco
 from gimwatch.model.robots import Robot
 
 __all__ = [
     "GivenMatrix",
     "MujocoSource",
-    "import_mujoco",
     "real_array",
     "robot_from_model",
     "type_name",
@@ -182,7 +182,7 @@ class MujocoSource:
     reads_state = True
 
     def __init__(self, model, data, *, robot=None, armature: bool = True) -> None:
-        mujoco = import_mujoco()
+        mujoco = import_mujoco("a MuJoCo watch")
         if not isinstance(model, mujoco.MjModel):
             raise InputError("model", "a mujoco.MjModel", type_name(model))
         if not isinstance(data, mujoco.MjData):
@@ -354,17 +354,3 @@ def _rotation(quaternion_wxyz: np.ndarray) -> np.ndarray:
             [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
         ]
     )
-
-
-def import_mujoco():
-    """Import MuJoCo, or say which extra installs it."""
-    try:
-        import mujoco
-    except ImportError:
-        raise InputError(
-            "a MuJoCo watch",
-            "used with MuJoCo installed",
-            "mujoco missing",
-            hint="pip install 'gimwatch[peers]'",
-        ) from None
-    return mujoco
