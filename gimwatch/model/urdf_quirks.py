@@ -9,15 +9,15 @@ and listed in one [`URDFWarning`][gimwatch.errors.URDFWarning] per file:
   control characters after the root element (removed);
 * a default namespace on ``<robot xmlns="...">`` or another element (tags read without it,
   as urdfdom reads them; see `gimwatch.model.urdf_namespaces`);
-* line breaks, tabs or padding inside number attributes (Unitree's hands: ``xyz="0\n 0.1
-  0"``): read as single spaces (urdfdom cannot read them and silently drops that link's
-  whole inertial);
+* line breaks or tabs inside number attributes, and padded single numbers (Unitree's
+  hands wrap ``ixx`` over lines): read as single spaces (urdfdom cannot read them and
+  silently drops that link's whole inertial);
 * ``<visual>`` and ``<collision>`` elements that urdfdom cannot read (an unknown geometry such
   as Bullet's ``<plane>``, an empty ``<geometry>``, a four-number mesh scale): removed — shapes
   do not enter M;
 * numbers separated by commas (``xyz="0.07, 0, -0.69"``): read as spaces, only where the
   commas are the three numbers' separators (a decimal comma, ``"0,5 0"``, is refused);
-* a visual ``<material>`` without a name (Unitree's H1-2) and a ``<material>`` defined twice
+* a ``<material>`` without a name attribute (Unitree's H1-2) and a ``<material>`` defined twice
   (pybullet's racecar): removed (colours do not enter M);
 * joint limits: a negative ``effort``/``velocity`` ("unlimited", e.g. ``effort="-1"``) or a
   missing one (read as 0), a missing ``<limit>`` on a revolute or prismatic joint, and
@@ -189,7 +189,7 @@ def _is_numbers(text: str) -> bool:
 
 
 def padded_number_attributes(xml: str) -> list[str]:
-    r"""Attributes of numbers padded or split by other whitespace than one space each.
+    r"""Attributes of numbers urdfdom cannot read: split by line breaks or tabs, or padded.
 
     Read from the text, not the tree: expat turns line breaks and tabs in attributes into
     spaces, while urdfdom refuses ``"0.1\n"`` and then drops the link's whole inertial.
@@ -197,7 +197,10 @@ def padded_number_attributes(xml: str) -> list[str]:
     found = []
     for match in _ATTRIBUTE.finditer(xml):
         value = match.group(3) if match.group(3) is not None else match.group(4)
-        if value != " ".join(value.split()) and _is_numbers(value):
+        unreadable = any(c in value for c in "\t\n\r") or (
+            len(value.split()) == 1 and value != value.strip()
+        )  # urdfdom splits vectors at single spaces only, and reads a padded scalar as text
+        if unreadable and _is_numbers(value):
             found.append(match.group(1))
     return found
 
@@ -219,13 +222,13 @@ def _material_quirks(root: ET.Element) -> list[str]:
     for link in root.findall("link"):
         for visual in link.findall("visual"):
             for material in visual.findall("material"):
-                if not (material.get("name") or "").strip():
+                if material.get("name") is None:  # name="" urdfdom reads (Go2 has them)
                     visual.remove(material)
                     unnamed.append(link.get("name"))
     seen, duplicates = set(), []
     for material in root.findall("material"):
         name = material.get("name")
-        if not (name or "").strip():
+        if name is None:
             root.remove(material)
             unnamed.append("robot")
         elif name in seen:
