@@ -603,7 +603,8 @@ MUTANTS = (
     Mutant(
         "swap-no-rollback",
         "gimwatch/output/swap.py",
-        "            except BaseException:\n                os.rename(old, target)\n                raise\n",
+        "            except BaseException:\n"
+        "                os.rename(old, target)\n                raise\n",
         "            except BaseException:\n                raise\n",
         SWAP,
         "a failed second rename leaves the previous results folder moved aside",
