@@ -603,8 +603,9 @@ MUTANTS = (
     Mutant(
         "swap-no-rollback",
         "gimwatch/output/swap.py",
-        "        except BaseException:\n            os.rename(old, target)\n            raise\n",
-        "        except BaseException:\n            raise\n",
+        "            except BaseException:\n"
+        "                os.rename(old, target)\n                raise\n",
+        "            except BaseException:\n                raise\n",
         SWAP,
         "a failed second rename leaves the previous results folder moved aside",
     ),
@@ -636,10 +637,18 @@ MUTANTS = (
     Mutant(
         "swap-stale-old-not-restored",
         "gimwatch/output/swap.py",
-        "if OLD in entry.name and not os.path.lexists(target):",
-        "if OLD in entry.name and not os.path.lexists(target) and False:",
+        "if complete and not os.path.lexists(target):",
+        "if complete and not os.path.lexists(target) and False:",
         HOSTILE,
         "a previous folder a killed writer moved aside is deleted, not put back",
+    ),
+    Mutant(
+        "swap-previous-unrecorded",
+        "gimwatch/output/swap.py",
+        "    mark_staging(target)\n",
+        "",
+        ("tests/test_faults_folders_killed.py",),
+        "a writer killed after the exchange leaves the previous folder hidden for good",
     ),
     Mutant(
         "swap-restored-keeps-record",

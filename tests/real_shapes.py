@@ -50,6 +50,10 @@ def arm(
     implicit_world: bool = False,
     unnamed: bool = False,
     unbound_prefix: bool = False,
+    unnamed_material: bool = False,
+    duplicate_material: bool = False,
+    multiline_numbers: bool = False,
+    welded_bad_inertia: bool = False,
     ros_extras: bool = True,
 ) -> str:
     """The arm's URDF text with the given quirks."""
@@ -61,24 +65,34 @@ def arm(
     name = "" if unnamed else ' name="lbr_iiwa"'  # open_manipulator's xacro output has none
     text += f'<robot{name}{xmlns} xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
     text += "" if implicit_world else '  <link name="world"/>\n'  # Drake's pr2_simplified
+    if duplicate_material:  # pybullet's racecar defines its colours twice
+        for rgba in ("0.4 0.4 0.4 1", "0.2 0.2 0.2 1"):
+            text += f'  <material name="Grey"><color rgba="{rgba}"/></material>\n'
+    # cuRobo's panda: a base whose inertia is not positive semi-definite, welded to the world
+    ixx = "-0.05" if welded_bad_inertia else "0.05"
     text += '  <link name="base"><inertial><origin xyz="0 0 0.1"/>'
-    text += '<mass value="5"/><inertia ixx="0.05" ixy="0" ixz="0" iyy="0.06" iyz="0" '
+    text += f'<mass value="5"/><inertia ixx="{ixx}" ixy="0" ixz="0" iyy="0.06" iyz="0" '
     text += 'izz="0.03"/></inertial></link>\n'
     text += '  <joint name="world_joint" type="fixed"><parent link="world"/>'
     text += '<child link="base"/></joint>\n'
     parent = "base"
     for i, (m, c, ixx, iyy, izz, z, axis) in enumerate(_LINKS, 1):
         shapes = f'<visual><geometry><mesh filename="package://iiwa/meshes/link_{i}.stl"/>'
-        shapes += '</geometry><material name="Grey"><color rgba="0.4 0.4 0.4 1.0"/>'
+        material = "<material>" if unnamed_material and i == 3 else '<material name="Grey">'
+        shapes += f'</geometry>{material}<color rgba="0.4 0.4 0.4 1.0"/>'  # Unitree's H1-2
         shapes += "</material></visual>"
         if bad_shapes and i == 2:
             shapes += '<collision><geometry><plane normal="0 0 1"/></geometry></collision>'
             shapes += '<visual><geometry><mesh filename="l.stl" scale="1 1 1 1"/></geometry>'
             shapes += "</visual><visual><geometry/></visual>"
+        com = f"0 0.01 {c}"
+        inertia = f'ixx="{ixx}" ixy="0" ixz="0" iyy="{iyy}" iyz="0" izz="{izz}"'
+        if multiline_numbers and i == 4:  # Unitree's dexterous hands: CAD output wrapped
+            com = f"0\n        0.01\t{c}"
+            inertia = inertia.replace(f'ixx="{ixx}"', f'ixx="\n   {ixx}\n"')
         text += (
-            f'  <link name="link_{i}"><inertial><origin rpy="0 0 0" xyz="0 0.01 {c}"/>'
-            f'<mass value="{m}"/><inertia ixx="{ixx}" ixy="0" ixz="0" iyy="{iyy}" iyz="0" '
-            f'izz="{izz}"/></inertial>{shapes}</link>\n'
+            f'  <link name="link_{i}"><inertial><origin rpy="0 0 0" xyz="{com}"/>'
+            f'<mass value="{m}"/><inertia {inertia}/></inertial>{shapes}</link>\n'
         )
         origin = f"0, 0, {z}" if comma_origins and i % 2 else f"0 0 {z}"
         effort = "-1" if unlimited_effort and i == 3 else "300"

@@ -69,6 +69,10 @@ QUIRKS = [
     "implicit_world",
     "unnamed",
     "unbound_prefix",
+    "unnamed_material",
+    "duplicate_material",
+    "multiline_numbers",
+    "welded_bad_inertia",
 ]
 #: Read with one "lenient" warning (the others are plain XML that every parser reads).
 WARNED = set(QUIRKS) - {"header", "crlf", "bom"}
@@ -80,6 +84,9 @@ REFUSED_RAW = {
     "empty_dynamics",
     "implicit_world",
     "unnamed",
+    "unnamed_material",
+    "duplicate_material",
+    "multiline_numbers",
 }
 
 

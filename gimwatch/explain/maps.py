@@ -31,6 +31,7 @@ from gimwatch.metrics.analyze import choose_path
 from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.metrics.linear_analysis import LINEAR_METRICS
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
+from gimwatch.model.q_checks import as_configurations
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, parse_chain_spec
 from gimwatch.model.sampling import is_real_limit
 from gimwatch.suggest import did_you_mean
@@ -181,6 +182,20 @@ class ConditioningMap:
     interrupted: bool = False
 
 
+def checked_configurations(spec: str, path: str, qs: np.ndarray, *, name: str = "q") -> np.ndarray:
+    """``qs`` (K, nq) checked as every q is checked (`gimwatch.model.q_checks`).
+
+    Length and finiteness; on Pinocchio's path each (cos θ, sin θ) and quaternion of norm 1
+    too (DeNOC's q are angles, without unit blocks).
+    """
+    if path != "denoc":
+        return as_configurations(_robot(spec), qs, name=name)
+    size = len(_linear_model(spec)[0].joint_names)
+    if qs.ndim != 2 or qs.shape[1] != size or not np.all(np.isfinite(qs)):
+        raise InputError(name, f"rows of {size} finite numbers", qs.shape)
+    return qs
+
+
 def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int], list[str], list]:
     """(robot name, q index, unit, (lower, upper)) of each named joint, and the neutral q.
 
@@ -326,10 +341,7 @@ def conditioning_map(
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                 raise InputError("--range", "finite lower < upper", (joint, lo, hi))
     if q is not None:
-        q = np.asarray(q, dtype=float).ravel()
-        if q.shape != base_q.shape or not np.all(np.isfinite(q)):
-            raise InputError("--q", f"{base_q.size} finite numbers", q.size)
-        base_q = q
+        base_q = checked_configurations(spec, path, np.asarray(q, dtype=float).ravel()[None, :])[0]
     x = np.linspace(*limits[0], grid)
     y = np.linspace(*limits[1], grid)
     rows = max(1, CHUNK_POINTS // grid)

@@ -21,6 +21,7 @@ from gimwatch.errors import InputError
 from gimwatch.explain.maps import (
     CHUNK_POINTS,
     check_metrics,
+    checked_configurations,
     metrics_at,
     robot_coordinates,
     run_chunks,
@@ -128,6 +129,7 @@ def trajectory_metrics(
     metrics = check_metrics(list(metrics), path)
     name, coordinates = robot_coordinates(spec, path)
     time, qs = read_trajectory_csv(trajectory, coordinates)
+    qs = checked_configurations(spec, path, qs, name=f"q of {trajectory}")
     starts = range(0, len(qs), CHUNK_POINTS)
     tasks = [Task(metrics_at, (spec, path, qs[s : s + CHUNK_POINTS], metrics)) for s in starts]
     values, interrupted = run_chunks(

@@ -14,7 +14,7 @@ import numpy.typing as npt
 from gimwatch.errors import InputError
 from gimwatch.model.sampling import Robot, unit_block_size
 
-__all__ = ["UNIT_NORM_TOLERANCE", "as_configuration", "unit_blocks"]
+__all__ = ["UNIT_NORM_TOLERANCE", "as_configuration", "as_configurations", "unit_blocks"]
 
 
 #: |‖block‖ − 1| allowed for the unit blocks of a q given to the library functions.
@@ -39,8 +39,8 @@ def unit_blocks(robot: Robot) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
     return blocks
 
 
-def _unit_norms(robot: Robot, q: np.ndarray) -> np.ndarray:
-    """The norm of every unit block of q, by one gather and one segmented sum (no joint loop)."""
+def _unit_norms(robot: Robot, qs: np.ndarray) -> np.ndarray:
+    """The norm of every unit block of each row of ``qs`` (K, nq): (K, blocks), no joint loop."""
     gather = robot.__dict__.get("_unit_gather")
     if gather is None:
         stops, sizes, _ = unit_blocks(robot)
@@ -50,7 +50,7 @@ def _unit_norms(robot: Robot, q: np.ndarray) -> np.ndarray:
         gather = (index, np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.intp))
         object.__setattr__(robot, "_unit_gather", gather)  # frozen: a cache, not state
     index, offsets = gather
-    return np.sqrt(np.add.reduceat(q[index] ** 2, offsets))
+    return np.sqrt(np.add.reduceat(qs[:, index] ** 2, offsets, axis=1))
 
 
 def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
@@ -69,18 +69,36 @@ def as_configuration(robot: Robot, q: npt.ArrayLike) -> np.ndarray:
         raise InputError("q", "a vector of real numbers", str(exc)) from None
     if array.shape != (robot.nq,):
         raise InputError("q", f"a vector of {robot.nq} numbers for {robot.name}", array.shape)
-    if not np.all(np.isfinite(array)):
-        raise InputError("q", "finite", array.tolist())
+    return as_configurations(robot, array[None, :])[0]
+
+
+def as_configurations(robot: Robot, qs: npt.ArrayLike, *, name: str = "q") -> np.ndarray:
+    """`as_configuration` for every row of ``qs`` (K, nq) at once; errors name the row.
+
+    Every q a library function, a trajectory file or a map receives goes through here, so a
+    (cos θ, sin θ) of norm 2 is refused wherever it comes from.
+    """
+    array = np.asarray(qs, dtype=float)
+    if array.ndim != 2 or array.shape[1] != robot.nq:
+        raise InputError(name, f"rows of {robot.nq} numbers for {robot.name}", array.shape)
+    finite = np.isfinite(array).all(axis=1)
+    if not finite.all():
+        row = int(np.flatnonzero(~finite)[0])
+        raise InputError(_row(name, row, len(array)), "finite", array[row].tolist())
     stops, sizes, names = unit_blocks(robot)
-    if stops.size:
+    if stops.size and len(array):
         norms = _unit_norms(robot, array)
-        bad = np.flatnonzero(~(np.abs(norms - 1.0) <= UNIT_NORM_TOLERANCE))
-        if bad.size:
-            k = int(bad[0])
+        bad = ~(np.abs(norms - 1.0) <= UNIT_NORM_TOLERANCE)
+        if bad.any():
+            row, k = (int(i) for i in np.argwhere(bad)[0])
             what = "quaternion" if sizes[k] == 4 else "(cos θ, sin θ)"
             raise InputError(
-                f"the {what} of joint {names[k]!r} in q",
+                f"the {what} of joint {names[k]!r} in {_row(name, row, len(array))}",
                 f"of norm 1 (within {UNIT_NORM_TOLERANCE:g})",
-                round(float(norms[k]), 9),
+                round(float(norms[row, k]), 9),
             )
     return array
+
+
+def _row(name: str, row: int, rows: int) -> str:
+    return name if rows == 1 else f"{name} (row {row + 1})"

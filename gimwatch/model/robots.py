@@ -165,7 +165,7 @@ def _build_model(xml: str, source: str, floating: bool) -> tuple[pin.Model, str]
     """Pinocchio's model of checked URDF text, and the text it read (normalised quirks)."""
     from gimwatch.model.urdf_text import check_urdf_text
 
-    root, xml = check_urdf_text(xml, source, stacklevel=3)
+    root, xml = check_urdf_text(xml, source, stacklevel=3, floating=floating)
     depth = _tree_depth(root)
     if depth > MAX_TREE_DEPTH:
         raise URDFError(

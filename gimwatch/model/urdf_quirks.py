@@ -7,11 +7,18 @@ and listed in one [`URDFWarning`][gimwatch.errors.URDFWarning] per file:
 
 * text: an XML declaration after comments or blank lines (removed), NUL bytes or other
   control characters after the root element (removed);
-* a default namespace on ``<robot xmlns="...">`` (tags read without it);
+* a default namespace on ``<robot xmlns="...">`` or another element (tags read without it,
+  as urdfdom reads them; see `gimwatch.model.urdf_namespaces`);
+* line breaks or tabs inside number attributes, and padded single numbers (Unitree's
+  hands wrap ``ixx`` over lines): read as single spaces (urdfdom cannot read them and
+  silently drops that link's whole inertial);
 * ``<visual>`` and ``<collision>`` elements that urdfdom cannot read (an unknown geometry such
   as Bullet's ``<plane>``, an empty ``<geometry>``, a four-number mesh scale): removed — shapes
   do not enter M;
-* numbers separated by commas (``xyz="0.07, 0, -0.69"``): read as spaces;
+* numbers separated by commas (``xyz="0.07, 0, -0.69"``): read as spaces, only where the
+  commas are the three numbers' separators (a decimal comma, ``"0,5 0"``, is refused);
+* a ``<material>`` without a name attribute (Unitree's H1-2) and a ``<material>`` defined twice
+  (pybullet's racecar): removed (colours do not enter M);
 * joint limits: a negative ``effort``/``velocity`` ("unlimited", e.g. ``effort="-1"``) or a
   missing one (read as 0), a missing ``<limit>`` on a revolute or prismatic joint, and
   ``lower > upper`` (Bullet's "no limit"): the position range becomes the placeholder
@@ -24,7 +31,9 @@ and listed in one [`URDFWarning`][gimwatch.errors.URDFWarning] per file:
   joint it is modelled as an independent joint, as Pinocchio does;
 * a joint whose parent is an undeclared link named ``world`` (Drake's and Gazebo's name for
   the fixed frame, e.g. Drake's ``pr2_simplified.urdf``): ``<link name="world"/>`` is added,
-  massless, so the robot is attached to the fixed base as those readers attach it.
+  massless, so the robot is attached to the fixed base as those readers attach it;
+* an invalid ``<inertial>`` on a link welded by fixed joints to the root of a fixed-base
+  robot (cuRobo's panda): removed, as it never enters M (`gimwatch.model.urdf_text`).
 
 What makes M undefined or wrong is still refused by the value checks
 (`gimwatch.model.urdf_values`): non-finite or unparsable numbers in origins, axes and
@@ -34,16 +43,16 @@ Every scan here is linear in the size of the text.
 
 from __future__ import annotations
 
+import re
 import warnings
 import xml.etree.ElementTree as ET
 
 from gimwatch.errors import URDFError, URDFWarning
 
 __all__ = [
-    "fix_namespace",
     "fix_text_quirks",
     "fix_tree_quirks",
-    "parse_ignoring_prefixes",
+    "padded_number_attributes",
     "warn_quirks",
 ]
 
@@ -52,6 +61,8 @@ _UNLIMITED = "1000"
 _GEOMETRIES = ("box", "cylinder", "sphere", "mesh")
 _SHAPE_ATTRIBUTES = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",)}
 _CONTROL = {chr(c) for c in range(32) if chr(c) not in "\t\n\r"}
+#: An attribute and its quoted value, as written (one linear scan of the text).
+_ATTRIBUTE = re.compile(r"""(?<![\w:.-])([\w:.-]+)(\s*=\s*)(?:"([^"<]*)"|'([^'<]*)')""")
 
 
 def fix_text_quirks(xml: str) -> tuple[str, list[str]]:
@@ -87,57 +98,6 @@ def _misplaced_declaration(xml: str) -> tuple[int, int] | None:
         return None
     close = xml.find("?>", position)
     return None if close < 0 else (position, close + 2)
-
-
-def parse_ignoring_prefixes(xml: str) -> tuple[ET.Element, list[str]]:
-    """Parse without namespaces, as urdfdom does, and drop elements with a prefix.
-
-    For texts expat refuses with "unbound prefix": URDF's own elements never have one, so
-    a prefixed element (and a prefixed attribute) is an extension no URDF reader uses.
-
-    Raises:
-        ET.ParseError: The text is not well-formed XML even without namespaces.
-    """
-    from xml.parsers import expat
-
-    builder = ET.TreeBuilder()
-    parser = expat.ParserCreate()
-    parser.StartElementHandler = builder.start
-    parser.EndElementHandler = builder.end
-    parser.CharacterDataHandler = builder.data
-    try:
-        parser.Parse(xml, True)
-    except expat.ExpatError as exc:
-        raise ET.ParseError(str(exc)) from None
-    root = builder.close()
-    removed = []
-    for parent in list(root.iter()):
-        for child in list(parent):
-            if ":" in child.tag:
-                parent.remove(child)
-                removed.append(f"<{child.tag}>")
-        for key in [key for key in parent.attrib if ":" in key or key == "xmlns"]:
-            del parent.attrib[key]  # declarations too: the tags are read without namespaces
-            if not key.startswith("xmlns"):
-                removed.append(f"{key}=")
-    shown = ", ".join(dict.fromkeys(removed[:20]))
-    return root, [f"elements and attributes with an undeclared namespace prefix removed ({shown})"]
-
-
-def _strip_namespaces(root: ET.Element) -> bool:
-    changed = False
-    for element in root.iter():
-        if isinstance(element.tag, str) and element.tag.startswith("{"):
-            element.tag = element.tag.split("}", 1)[1]
-            changed = True
-    return changed
-
-
-def fix_namespace(root: ET.Element) -> list[str]:
-    """Read ``<robot xmlns="...">`` without its default namespace (urdfdom ignores it)."""
-    if isinstance(root.tag, str) and root.tag.startswith("{") and _strip_namespaces(root):
-        return ["a default XML namespace on <robot> ignored"]
-    return []
 
 
 def _is_number_list(text: str, count: int) -> bool:
@@ -200,8 +160,9 @@ def _drop_unreadable_shapes(root: ET.Element) -> list[str]:
 def _commas_as_spaces(root: ET.Element) -> list[str]:
     """Origins and axes whose three numbers are separated by commas (``0.07, 0, -0.69``).
 
-    Only where the commas are unambiguous separators: a decimal comma (``0,5``) would change
-    a value and is left to the value checks, which refuse it.
+    Only where the commas are the separators: three fields, none holding a space. A decimal
+    comma (``0,5 0``, two fields) would change a value and is left to the value checks,
+    which refuse it.
     """
     where = []
     for element in root.iter():
@@ -210,14 +171,78 @@ def _commas_as_spaces(root: ET.Element) -> list[str]:
         for key in ("xyz", "rpy"):
             value = element.get(key)
             if value and "," in value:
-                spaced = value.replace(",", " ").split()
-                if len(spaced) == 3:
-                    element.set(key, " ".join(spaced))
+                fields = [field.strip() for field in value.split(",")]
+                if len(fields) == 3 and all(f and len(f.split()) == 1 for f in fields):
+                    element.set(key, " ".join(fields))
                     where.append(f"<{element.tag} {key}={value!r}>")
     if not where:
         return []
     more = ", ..." if len(where) > 2 else ""
     return [f"numbers separated by commas read as spaces ({', '.join(where[:2])}{more})"]
+
+
+def _is_numbers(text: str) -> bool:
+    try:
+        return bool(text.split()) and all(abs(float(p)) >= 0 for p in text.split())
+    except ValueError:
+        return False
+
+
+def padded_number_attributes(xml: str) -> list[str]:
+    r"""Attributes of numbers urdfdom cannot read: split by line breaks or tabs, or padded.
+
+    Read from the text, not the tree: expat turns line breaks and tabs in attributes into
+    spaces, while urdfdom refuses ``"0.1\n"`` and then drops the link's whole inertial.
+    """
+    found = []
+    for match in _ATTRIBUTE.finditer(xml):
+        value = match.group(3) if match.group(3) is not None else match.group(4)
+        unreadable = any(c in value for c in "\t\n\r") or (
+            len(value.split()) == 1 and value != value.strip()
+        )  # urdfdom splits vectors at single spaces only, and reads a padded scalar as text
+        if unreadable and _is_numbers(value):
+            found.append(match.group(1))
+    return found
+
+
+def _normalise_number_whitespace(root: ET.Element, padded: list[str]) -> list[str]:
+    if not padded:
+        return []
+    for element in root.iter():
+        for key, value in element.attrib.items():
+            if value != " ".join(value.split()) and _is_numbers(value):
+                element.set(key, " ".join(value.split()))
+    shown = ", ".join(dict.fromkeys(padded[:4])) + (", ..." if len(set(padded)) > 4 else "")
+    return [f"line breaks, tabs or padding inside numbers read as separators ({shown})"]
+
+
+def _material_quirks(root: ET.Element) -> list[str]:
+    """Visual materials urdfdom refuses: without a name (removed), named twice (later ones)."""
+    unnamed = []
+    for link in root.findall("link"):
+        for visual in link.findall("visual"):
+            for material in visual.findall("material"):
+                if material.get("name") is None:  # name="" urdfdom reads (Go2 has them)
+                    visual.remove(material)
+                    unnamed.append(link.get("name"))
+    seen, duplicates = set(), []
+    for material in root.findall("material"):
+        name = material.get("name")
+        if name is None:
+            root.remove(material)
+            unnamed.append("robot")
+        elif name in seen:
+            root.remove(material)
+            duplicates.append(name)
+        seen.add(name)
+    fixes = []
+    if unnamed:
+        shown = ", ".join(dict.fromkeys(unnamed[:3])) + (", ..." if len(unnamed) > 3 else "")
+        fixes.append(f"{len(unnamed)} <material> without a name removed ({shown})")
+    if duplicates:
+        shown = ", ".join(dict.fromkeys(duplicates[:3]))
+        fixes.append(f"{len(duplicates)} repeated <material> definition(s) removed ({shown})")
+    return fixes
 
 
 def _limit_quirks(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
@@ -302,8 +327,11 @@ def _implicit_world(root: ET.Element) -> list[str]:
     return [f"the undeclared parent link 'world' of {shown} added as the fixed base (massless)"]
 
 
-def fix_tree_quirks(root: ET.Element, source: str) -> list[str]:
-    """Normalise, in place, what urdfdom would refuse but M does not depend on."""
+def fix_tree_quirks(root: ET.Element, source: str, padded: list[str] = ()) -> list[str]:
+    """Normalise, in place, what urdfdom would refuse but M does not depend on.
+
+    ``padded``: the attributes `padded_number_attributes` found in the text.
+    """
     if root.tag != "robot":
         raise URDFError(source, f"the root element must be <robot>, got <{root.tag}>")
     unnamed = []
@@ -313,7 +341,9 @@ def fix_tree_quirks(root: ET.Element, source: str) -> list[str]:
         unnamed = [f"a <robot> without a name named {root.get('name')!r}"]
     kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
     return [
+        *_normalise_number_whitespace(root, list(padded)),
         *_commas_as_spaces(root),
+        *_material_quirks(root),
         *_drop_unreadable_shapes(root),
         *_limit_quirks(root, kinds),
         *_mimics_of_fixed(root, kinds),

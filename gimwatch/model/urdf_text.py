@@ -13,14 +13,20 @@ import warnings
 import xml.etree.ElementTree as ET
 
 from gimwatch.errors import URDFError, URDFWarning
-from gimwatch.model.urdf_quirks import (
+from gimwatch.model.urdf_namespaces import (
+    check_prefixed_elements,
     fix_namespace,
+    parse_as_urdfdom,
+    parse_ignoring_prefixes,
+)
+from gimwatch.model.urdf_quirks import (
     fix_text_quirks,
     fix_tree_quirks,
-    parse_ignoring_prefixes,
+    padded_number_attributes,
     warn_quirks,
 )
 from gimwatch.model.urdf_values import (
+    check_inertial_values,
     check_joint_values,
     check_link_values,
     warn_doubtful_inertias,
@@ -119,11 +125,26 @@ def parse_urdf_xml(xml: str, source: str) -> ET.Element:
     return _parse(xml, source)[0]
 
 
-def _parse(xml: str, source: str) -> tuple[ET.Element, list[str]]:
-    """The ``<robot>`` element and the text quirks fixed on the way (see urdf_quirks).
+def _read_tree(xml: str, source: str) -> tuple[ET.Element, list[str]]:
+    """The element tree as urdfdom reads it (`gimwatch.model.urdf_namespaces`)."""
+    try:
+        root = ET.fromstring(xml)
+    except ET.ParseError as exc:
+        if "unbound prefix" not in str(exc):
+            raise
+        return parse_ignoring_prefixes(xml, source)
+    if any(isinstance(e.tag, str) and e.tag.startswith("{") for e in root.iter()):
+        root = parse_as_urdfdom(xml)  # namespaces in use: read the tags as written
+        check_prefixed_elements(root, source)
+    return root, []
 
-    Comments are set aside first: a comment may mention ``<!DOCTYPE`` or be megabytes long
-    without counting against the file.
+
+def _parse(xml: str, source: str) -> tuple[ET.Element, list[str], list[str]]:
+    """The ``<robot>`` element, the quirks fixed on the way, and padded number attributes.
+
+    The attributes are those whose numbers are padded or split by line breaks or tabs in the
+    text (see urdf_quirks). Comments are set aside first: a comment may mention
+    ``<!DOCTYPE`` or be megabytes long without counting against the file.
     """
     if not xml.strip():
         raise URDFError(source, "the file is empty")
@@ -135,13 +156,8 @@ def _parse(xml: str, source: str) -> tuple[ET.Element, list[str]]:
             raise URDFError(source, f"{token.lstrip('<!')} declarations are not allowed in a URDF")
     _check_budget(text, source)
     try:
-        try:
-            root = ET.fromstring(xml)
-        except ET.ParseError as exc:
-            if "unbound prefix" not in str(exc):
-                raise
-            root, prefixed = parse_ignoring_prefixes(xml)
-            fixes += prefixed
+        root, prefixed = _read_tree(xml, source)
+        fixes += prefixed
     except ET.ParseError as exc:
         raise URDFError(source, f"malformed XML ({exc})") from exc
     depth = _element_depth(root)
@@ -154,10 +170,10 @@ def _parse(xml: str, source: str) -> tuple[ET.Element, list[str]]:
     fixes += fix_namespace(root)
     if root.tag != "robot":
         raise URDFError(source, f"the root element must be <robot>, got <{root.tag}>")
-    return root, fixes
+    return root, fixes, padded_number_attributes(text)
 
 
-def check_urdf(xml: str, source: str) -> ET.Element:
+def check_urdf(xml: str, source: str, *, floating: bool = True) -> ET.Element:
     """Check the structure of URDF text and return its ``<robot>`` element.
 
     Then every value urdfdom reads is checked (see `gimwatch.model.urdf_values`).
@@ -170,18 +186,22 @@ def check_urdf(xml: str, source: str) -> ET.Element:
         URDFWarning: Once per file, naming the links whose principal moments of inertia
             violate the triangle inequality.
     """
-    return check_urdf_text(xml, source, stacklevel=2)[0]
+    return check_urdf_text(xml, source, stacklevel=2, floating=floating)[0]
 
 
-def check_urdf_text(xml: str, source: str, *, stacklevel: int = 1) -> tuple[ET.Element, str]:
+def check_urdf_text(
+    xml: str, source: str, *, stacklevel: int = 1, floating: bool = True
+) -> tuple[ET.Element, str]:
     """`check_urdf`, and the text for parsers.
 
     That is ``xml`` itself or, when real-world conventions were normalised
     (`gimwatch.model.urdf_quirks`, one warning), the normalised document, so that
-    Pinocchio, DeNOC and MuJoCo read the same robot.
+    Pinocchio, DeNOC and MuJoCo read the same robot. With ``floating=False`` (the robot's
+    root link is fixed to the world), an invalid inertial of a link welded to the root by
+    fixed joints is removed with the warning instead of refused: it never enters M.
     """
-    root, fixes = _parse(xml, source)
-    fixes += fix_tree_quirks(root, source)
+    root, fixes, padded = _parse(xml, source)
+    fixes += fix_tree_quirks(root, source, padded)
     links = [link.get("name") for link in root.findall("link")]
     if not links:
         raise URDFError(source, "the robot has no <link>")
@@ -231,8 +251,12 @@ def check_urdf_text(xml: str, source: str, *, stacklevel: int = 1) -> tuple[ET.E
         raise URDFError(
             source, f"the links form a cycle not attached to the root: {', '.join(stray)}"
         )
+    welded = set() if floating else _welded_to_root(root, roots[0], children)
+    fixes += _drop_invalid_welded_inertials(root, welded, source)
     doubtful = [
-        link.get("name") for link in root.findall("link") if not check_link_values(link, source)
+        link.get("name")
+        for link in root.findall("link")
+        if not check_link_values(link, source) and link.get("name") not in welded
     ]
     for joint in root.findall("joint"):
         check_joint_values(joint, source)
@@ -284,6 +308,42 @@ def _check_mimics(root: ET.Element, source: str) -> None:
             ),
             stacklevel=3,
         )
+
+
+def _welded_to_root(root: ET.Element, top: str, children: dict[str, list[str]]) -> set[str]:
+    """The root link and the links joined to it by fixed joints only (fixed base)."""
+    fixed = {
+        joint.find("child").get("link")
+        for joint in root.findall("joint")
+        if joint.get("type") == "fixed"
+    }
+    found, stack = set(), [top]
+    while stack:
+        link = stack.pop()
+        found.add(link)
+        stack.extend(child for child in children.get(link, ()) if child in fixed)
+    return found
+
+
+def _drop_invalid_welded_inertials(root: ET.Element, welded: set[str], source: str) -> list[str]:
+    """Remove the invalid ``<inertial>`` of links welded to a fixed root (never in M)."""
+    dropped = []
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        if inertial is None or link.get("name") not in welded:
+            continue
+        try:
+            check_inertial_values(inertial, source, where=f"link {link.get('name')!r}")
+        except URDFError as exc:
+            link.remove(inertial)
+            dropped.append(f"{link.get('name')}: {exc.problem}")
+    if not dropped:
+        return []
+    shown = "; ".join(dropped[:2]) + ("; ..." if len(dropped) > 2 else "")
+    return [
+        f"{len(dropped)} invalid <inertial> on link(s) welded to the fixed root removed, as "
+        f"it never enters M ({shown})"
+    ]
 
 
 def _reachable(root: str, children: dict[str, list[str]]) -> set[str]:

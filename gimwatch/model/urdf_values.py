@@ -36,6 +36,7 @@ __all__ = [
     "INERTIA_RTOL",
     "MAX_MAGNITUDE",
     "SUPPORTED_JOINT_TYPES",
+    "check_inertial_values",
     "check_joint_values",
     "check_link_values",
     "check_principal_moments",
@@ -84,6 +85,8 @@ def _floats(
         hint = (
             " (an unexpanded xacro or roslaunch expression: run xacro on the file first)"
             if "$(" in (text or "") or "${" in (text or "")
+            else " (a decimal comma? write numbers with a decimal point, separated by spaces)"
+            if re.search(r"\d,\d", text or "")
             else ""
         )
         raise URDFError(source, f"{what} must be {rule}, got {text!r}{hint}", element=where)
@@ -178,6 +181,14 @@ def check_link_values(link: ET.Element, source: str) -> bool:
     inertial = link.find("inertial")
     if inertial is None:
         return True
+    return check_inertial_values(inertial, source, where=where)
+
+
+def check_inertial_values(inertial: ET.Element, source: str, *, where: str) -> bool:
+    """Check an ``<inertial>``: origin, mass >= 0, a positive semi-definite inertia.
+
+    Returns and raises as `check_link_values`.
+    """
     _check_origin(inertial, source=source, where=where)
     mass_tag = inertial.find("mass")
     if mass_tag is None:

@@ -266,7 +266,7 @@ class ResultsFolder(Reservation):
                 prefix = f".{self.target.name}{STAGING}"
                 self.staging = Path(tempfile.mkdtemp(prefix=prefix, dir=self.target.parent))
                 mark_staging(self.staging)
-            remove_stale(self.target, keep=self.staging)
+            remove_stale(self.target, keep=self.staging, marker=MARKER)
         except BaseException as exc:  # a signal delivered on leaving signals_held, included
             self.__exit__(type(exc), exc, exc.__traceback__)  # raises OutputError for OSError
             raise
@@ -299,8 +299,9 @@ class ResultsFolder(Reservation):
         _phase("write")
         try:
             os.chmod(self.staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
-            (self.staging / STAGING_RECORD).unlink()  # from here on, it is the results
-            written = {p.name for p in self.staging.iterdir()} - {MARKER}
+            # the record stays until the swap is done (swap): a writer killed before then
+            # leaves a folder the next writer recognises and clears
+            written = {p.name for p in self.staging.iterdir()} - {MARKER, STAGING_RECORD}
             previous = self.target if self.target.is_dir() else None
             ours = _written_by_gimwatch(previous) if previous else set()
             carried = set()

@@ -98,47 +98,62 @@ def exchange(a: Path, b: Path) -> bool:
 
 
 def swap(staging: Path, target: Path) -> None:
-    """Put ``staging`` at ``target``; afterwards ``staging`` holds the previous folder, if any."""
+    """Put ``staging`` at ``target``; afterwards ``staging`` holds the previous folder, if any.
+
+    During the swap both folders hold the staging record, and the previous folder keeps it:
+    whenever the writer is killed (SIGKILL cannot be held), what it leaves beside ``target``
+    carries the record, so the next writer's `remove_stale` finds it. (Without it, the
+    previous folder sat at the staging path after the exchange, hidden for good.) The
+    record is then taken out of the new folder at ``target``.
+    """
     if not target.exists():
         os.rename(staging, target)
+        (target / STAGING_RECORD).unlink(missing_ok=True)
         return
-    if exchange(staging, target):
-        return
-    old = target.parent / f".{target.name}{OLD}{secrets.token_hex(4)}"
-    mark_staging(target)  # a killed writer's moved-aside folder is then recognised as ours
+    (target / STAGING_RECORD).unlink(missing_ok=True)  # one a killed writer left in it
+    mark_staging(target)
     try:
-        os.rename(target, old)
-        try:
-            os.rename(staging, target)
-        except BaseException:
-            os.rename(old, target)
-            raise
+        if not exchange(staging, target):
+            old = target.parent / f".{target.name}{OLD}{secrets.token_hex(4)}"
+            os.rename(target, old)
+            try:
+                os.rename(staging, target)
+            except BaseException:
+                os.rename(old, target)
+                raise
+            os.rename(old, staging)
     except BaseException:
         (target / STAGING_RECORD).unlink(missing_ok=True)  # the previous folder as it was
         raise
-    os.rename(old, staging)
+    (target / STAGING_RECORD).unlink(missing_ok=True)
 
 
-def remove_stale(target: Path, *, keep: Path) -> None:
+def remove_stale(target: Path, *, keep: Path, marker: str = "") -> None:
     """Clear what a killed writer of ``target`` left (we hold its lock).
 
-    Its staging folders are removed; a previous folder it had moved aside (the two-rename
-    swap) is put back, without the record, when nothing took its place, else removed. Only
-    folders a writer made are touched: a staging folder holds its record, a folder moved aside
-    holds the staging record too (swap writes it before the rename); anything else with such a
-    name is the user's and is left alone.
+    Its staging folders are removed, and so is a previous folder it had swapped out (the
+    swap was done: the new folder is complete at ``target``, and the user's entries of the
+    previous one were linked into it). When nothing is at ``target``, a folder it left that
+    holds ``marker`` (a complete results folder, the previous one or the new one) is put
+    back there instead, without the record. A staging record left in ``target`` itself is
+    removed. Only folders a writer made are touched: they hold the staging record (`swap`
+    writes it into the previous folder before the exchange); anything else with such a name
+    is the user's and is left alone.
     """
     prefixes = (f".{target.name}{STAGING}", f".{target.name}{OLD}")
     try:
         entries = sorted(os.scandir(target.parent), key=lambda e: e.name)
     except OSError:
         return
+    if is_temporary(target):
+        (target / STAGING_RECORD).unlink(missing_ok=True)
     for entry in entries:
         path = Path(entry.path)
         if not entry.name.startswith(prefixes) or path == keep or not is_temporary(path):
             continue
         with signals_held():
-            if OLD in entry.name and not os.path.lexists(target):
+            complete = OLD in entry.name or (marker and os.path.isfile(path / marker))
+            if complete and not os.path.lexists(target):
                 try:
                     os.rename(entry.path, target)
                     # as it was: a record left in it would make the next fallback swap fail
