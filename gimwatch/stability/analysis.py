@@ -117,6 +117,13 @@ def default_configurations(robot: Robot, mj_model=None, keyframe: str | None = N
     return np.array(qpos, dtype=float)[None, :]
 
 
+def held_controls(mj_model, q: np.ndarray) -> np.ndarray:
+    """The controls that hold q: ``gear·q`` for a position servo (a bias with b1 ≠ 0), else 0."""
+    joints = np.clip(mj_model.actuator_trnid[:, 0], 0, max(mj_model.njnt - 1, 0))
+    ctrl = mj_model.actuator_gear[:, 0] * q[mj_model.jnt_qposadr[joints]]
+    return np.where(mj_model.actuator_biasprm[:, 1] != 0, ctrl, 0.0)
+
+
 def held_systems(
     robot: Robot,
     configurations: npt.ArrayLike | None = None,
@@ -129,7 +136,7 @@ def held_systems(
     """The held configurations (K, nq), the linear system at each, and the servos.
 
     MJCF files use their own actuators (``kp``/``kd`` replace them when given); other robots
-    need ``kp``. An MJCF servo holds q: its control is ``gear·q`` of its joint.
+    need ``kp``. An MJCF servo holds q: its control is `held_controls`.
 
     Raises:
         InputError: No actuators and no gains; bad gains; an unknown keyframe.
@@ -171,10 +178,7 @@ def held_systems(
                     own.not_modelled,
                 )
         else:
-            ctrl = (
-                mj_model.actuator_gear[:, 0]
-                * q[mj_model.jnt_qposadr[mj_model.actuator_trnid[:, 0]]]
-            )
+            ctrl = held_controls(mj_model, q)
             servos = mjcf_servos(robot, mj_model, ctrl)
         systems.append(linearise(model, servos, q, gravity=gravity, data=data))
     return qs, systems, servos
