@@ -14,7 +14,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-MAX_STEPS, MIN_STEPS = 20_000, 3_000
+MAX_STEPS, MIN_STEPS = 20_000, 10_000
 KICK, GROWTH = 1e-9, 1e-5
 INTEGRATORS = {"Euler": 0, "RK4": 1, "implicit": 2, "implicitfast": 3}
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mujoco_divergence import diverges, load
 
@@ -54,3 +55,29 @@ def test_verdict_at_the_models_own_timestep_is_mujocos(arm, tmp_path):
     if arm == "euler_arm":
         assert not record.stable
         assert main(["stability", str(path), "--no-gravity"]) == 1
+
+
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "guide" / "stability.md"
+
+
+def _docs_rows():
+    rows = []
+    for line in DOCS.read_text(encoding="utf-8").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 5 and (ARMS / f"{cells[0]}.xml").exists():
+            rows.append((cells[0], cells[1], *(float(c) for c in cells[2:])))
+    return rows
+
+
+def test_docs_table():
+    """docs/guide/stability.md's table: gimwatch's h* as printed, MuJoCo's bracket as printed."""
+    rows = _docs_rows()
+    assert len(rows) == 12
+    for arm, integrator, h_star, stable_at, diverges_at in rows:
+        path = str(ARMS / f"{arm}.xml")
+        (record,) = stability(path, integrators=[integrator], gravity=False)
+        assert float(f"{record.max_stable_timestep_s:.4g}") == h_star, (arm, integrator)
+        model = load(path, integrator)
+        assert not diverges(model, stable_at), (arm, integrator)
+        assert diverges(model, diverges_at), (arm, integrator)
+        assert abs(np.sqrt(stable_at * diverges_at) / h_star - 1) < 0.01  # "within 1 %"
