@@ -18,6 +18,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
+from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import Robot, as_configuration, load_robot
 from gimwatch.stability.linear_system import LinearSystem, linearise
 from gimwatch.stability.servos import Servos, gain_servos, mjcf_servos
@@ -114,7 +115,8 @@ def default_configurations(robot: Robot, mj_model=None, keyframe: str | None = N
         qpos = mj_model.key_qpos[names.index(keyframe)]
     else:
         qpos = mj_model.key_qpos[0] if mj_model.nkey else mj_model.qpos0
-    return np.array(qpos, dtype=float)[None, :]
+    # MuJoCo's qpos to Pinocchio's q (quaternions (w, x, y, z) -> (x, y, z, w))
+    return user_configuration(robot, np.array(qpos, dtype=float), key="keyframe")[None, :]
 
 
 def held_controls(mj_model, q: np.ndarray) -> np.ndarray:
