@@ -181,6 +181,21 @@ def test_configurations_random_q_and_keyframe(capsys):
     assert row["q"][3] == pytest.approx(-2.54818071)
 
 
+def test_a_trajectory_csv_is_held_row_by_row(capsys, tmp_path):
+    qs = np.array([[0.0, 0.7, 0.0, -1.2, 0.3], [0.2, 0.5, 0.1, -1.0, 0.0]])
+    csv = tmp_path / "path.csv"
+    csv.write_text(
+        "t,j1,j2,j3,j4,j5\n"
+        + "".join(f"{0.1 * k}," + ",".join(map(str, q)) + "\n" for k, q in enumerate(qs))
+    )
+    path = str(ARMS / "general_arm.xml")
+    assert main(["stability", path, "--trajectory", str(csv), "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    assert [r["q"] for r in rows] == qs.tolist()
+    expected = stability(path, qs)
+    assert [r["max_stable_timestep_s"] for r in rows] == [r.max_stable_timestep_s for r in expected]
+
+
 @pytest.mark.parametrize(
     ("argv", "message"),
     [

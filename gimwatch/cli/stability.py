@@ -49,6 +49,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--random", type=positive_int, metavar="K", help="hold K random configurations"
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the draws")
+    parser.add_argument(
+        "--trajectory",
+        metavar="CSV",
+        help="hold every row of a CSV of q (as map --trajectory: nq columns in Pinocchio's "
+        "q order, an optional header and t column)",
+    )
     parser.add_argument("--json", action="store_true", help="print JSON rows")
 
 
@@ -57,6 +63,12 @@ def _configurations(robot, args):
         return user_configuration(robot, args.q, key="--q")[None, :]
     if args.random is not None:
         return random_configurations(robot, args.random, seed=args.seed)
+    if args.trajectory is not None:
+        from gimwatch.explain.trajectory import read_trajectory_csv
+        from gimwatch.output.figures import joint_coordinate_units
+
+        names = joint_coordinate_units(robot.model)[0]
+        return read_trajectory_csv(args.trajectory, names)[1]
     return None
 
 
@@ -76,8 +88,11 @@ def _rows(spec: str, args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> int:
     """One row per robot, configuration and integrator; exit 1 if any is unstable."""
-    if sum(x is not None for x in (args.q, args.random, args.keyframe)) > 1:
-        raise InputError("--q, --random and --keyframe", "used one at a time", "several")
+    chosen = (args.q, args.random, args.keyframe, args.trajectory)
+    if sum(x is not None for x in chosen) > 1:
+        raise InputError(
+            "--q, --random, --keyframe and --trajectory", "used one at a time", "several"
+        )
     if args.random is not None and args.random > MAX_RANDOM:
         raise InputError("--random", f"at most {MAX_RANDOM}", args.random)
     for name in args.integrator or ():
