@@ -29,6 +29,7 @@ LAYERS = {
     "crosscheck": 4,
     "metrics": 4,
     "watch": 4,
+    "stability": 4,
     "simulation": 5,
     "stress": 6,
     "survey": 6,

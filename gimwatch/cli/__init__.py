@@ -79,6 +79,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "gimwatch.cli.armature",
         "the least joint armature that brings kappa under a target, and what it costs",
     ),
+    "stability": (
+        "gimwatch.cli.stability",
+        "will it explode? the largest stable timestep under the servos and integrator, and why",
+    ),
     "robots": ("gimwatch.cli.robots", "list the robots gimwatch can load: name, nv, base, source"),
     "metrics": ("gimwatch.cli.metrics", "list the metrics gimwatch can compute and watch"),
 }

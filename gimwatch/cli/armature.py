@@ -1,4 +1,4 @@
-"""The least joint armature that brings κ under a target at given or random configurations."""
+"""The least joint armature that brings κ under a target, or makes a timestep stable."""
 
 from __future__ import annotations
 
@@ -12,21 +12,38 @@ from gimwatch.errors import InputError
 from gimwatch.explain.armature import minimal_armature
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, random_configurations
+from gimwatch.stability.step_maps import INTEGRATORS
 
 NAME = "armature"
 HELP = "the least joint armature that brings kappa under a target, and what it costs"
 #: More configurations than this make each cutting-plane round slow; sample fewer.
 MAX_SAMPLES = 100_000
+#: Random configurations of the κ target when neither --q nor --samples is given.
+DEFAULT_SAMPLES = 100
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("robot", help="chain:N, a URDF path, or an example-robot-data name")
-    parser.add_argument(
-        "--target", type=float, required=True, metavar="KAPPA", help="the largest kappa allowed"
+    parser.add_argument("robot", help="chain:N, a URDF or MJCF path, or an example-robot-data name")
+    goal = parser.add_mutually_exclusive_group(required=True)
+    goal.add_argument("--target", type=float, metavar="KAPPA", help="the largest kappa allowed")
+    goal.add_argument(
+        "--timestep",
+        type=float,
+        metavar="H",
+        help="a timestep (s) to make stable under the robot's servos and --integrator",
     )
     parser.add_argument(
-        "--samples", type=positive_int, default=100, metavar="K", help="random configurations"
+        "--integrator",
+        choices=tuple(INTEGRATORS),
+        help="with --timestep: the integrator (default: the model's own; Euler without one)",
+    )
+    parser.add_argument(
+        "--samples",
+        type=positive_int,
+        metavar="K",
+        help=f"random configurations (default: {DEFAULT_SAMPLES} for --target; the keyframe "
+        "or neutral configuration for --timestep)",
     )
     parser.add_argument("--seed", type=non_negative_int, default=0, help="seed of the draws")
     parser.add_argument(
@@ -37,20 +54,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="one value per joint, least total (cutting planes); default: one uniform value",
     )
+    parser.add_argument("--kp", type=float, nargs="+", help="--timestep: servo stiffness")
+    parser.add_argument("--kd", type=float, nargs="+", help="--timestep: servo damping")
+    parser.add_argument(
+        "--no-gravity", action="store_true", help="--timestep: leave gravity's stiffness out"
+    )
+    parser.add_argument("--keyframe", metavar="NAME", help="--timestep, MJCF: hold this keyframe")
     parser.add_argument("--json", action="store_true", help="print JSON")
 
 
 def run(args: argparse.Namespace) -> int:
     """Compute and print."""
-    if args.samples > MAX_SAMPLES:
+    if args.samples is not None and args.samples > MAX_SAMPLES:
         raise InputError("--samples", f"at most {MAX_SAMPLES}", args.samples)
+    if args.timestep is not None:
+        return _timestep(args)
+    for flag in ("integrator", "kp", "kd", "keyframe"):
+        if getattr(args, flag) is not None:
+            raise InputError(f"--{flag}", "given only with --timestep", getattr(args, flag))
     if not np.isfinite(args.target) or args.target <= 1.0:
         raise InputError("--target", "a number > 1 (κ ≥ 1 always)", args.target)
     robot = load_robot(args.robot, max_nv=DATA_NV_LIMIT)
     if args.q is not None:
         qs = user_configuration(robot, args.q, key="--q")[None, :]
     else:
-        qs = random_configurations(robot, args.samples, seed=args.seed)
+        qs = random_configurations(robot, args.samples or DEFAULT_SAMPLES, seed=args.seed)
     plan = minimal_armature(robot, qs, args.target, per_joint=args.per_joint)
     if args.json:
         print(json_text(plan.to_dict()))
@@ -66,4 +94,63 @@ def run(args: argparse.Namespace) -> int:
         f"q̈ under gravity changes by {np.median(change):.1%} (median), "
         f"{change.max():.1%} (max) over the configurations"
     )
+    return 0
+
+
+def _timestep(args: argparse.Namespace) -> int:
+    from gimwatch.explain.timestep_armature import timestep_armature
+    from gimwatch.stability.analysis import held_systems
+
+    if not (np.isfinite(args.timestep) and args.timestep > 0):
+        raise InputError("--timestep", "a finite number of seconds > 0", args.timestep)
+    robot = load_robot(args.robot, floating=False, max_nv=DATA_NV_LIMIT)
+    if args.q is not None and args.samples is not None:
+        raise InputError("--q and --samples", "used one at a time", "both")
+    qs = None
+    if args.q is not None:
+        qs = user_configuration(robot, args.q, key="--q")[None, :]
+    elif args.samples is not None:
+        qs = random_configurations(robot, args.samples, seed=args.seed)
+    options = {"kp": args.kp, "kd": args.kd, "gravity": not args.no_gravity}
+    integrator = args.integrator
+    if integrator is None:
+        _, _, servos = held_systems(robot, qs, keyframe=args.keyframe, **options)
+        integrator = servos.integrator or "Euler"
+    plan = timestep_armature(
+        robot,
+        args.timestep,
+        integrator,
+        qs,
+        per_joint=args.per_joint,
+        keyframe=args.keyframe,
+        **options,
+    )
+    if args.json:
+        print(json_text(plan.to_dict()))
+        return 0
+    kind = "per joint (least total)" if plan.per_joint else "uniform"
+    count = len(plan.h_star_before_s)
+    print(
+        f"{robot.name}: {integrator} stable at {plan.timestep_s:g} s over {count} "
+        f"configuration(s), {kind} ({plan.method})"
+    )
+    print(
+        f"h* (min over configurations): {min(plan.h_star_before_s):.4g} s -> "
+        f"{min(plan.h_star_after_s):.4g} s"
+    )
+    rows = list(
+        zip(
+            plan.dof_names,
+            plan.armature,
+            plan.inertia_percent,
+            plan.servo_frequency_before_rad_s,
+            plan.servo_frequency_after_rad_s,
+            strict=True,
+        )
+    )
+    print(table(["coordinate", "armature", "% of M_ii", "servo_rad_s", "after_rad_s"], rows))
+    gap = "" if not plan.per_joint else f" (least total >= {plan.lower_bound:.6g})"
+    print(f"total {plan.total:.6g}{gap}")
+    change = np.array(plan.qdd_change)
+    print(f"q̈ under gravity changes by {change.max():.1%} (max over the configurations)")
     return 0

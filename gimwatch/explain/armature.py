@@ -25,6 +25,7 @@ armature set in Pinocchio's ``model.armature`` (the CRBA adds it to M's diagonal
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +38,7 @@ from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
-__all__ = ["ArmaturePlan", "minimal_armature"]
+__all__ = ["ArmaturePlan", "least_total", "minimal_armature"]
 
 MAX_CUTS = 500
 
@@ -101,28 +102,53 @@ def _uniform_lift(Ms: list[np.ndarray], added: np.ndarray, target: float) -> flo
 
 
 def _least_total(Ms: list[np.ndarray], target: float, rtol: float) -> tuple[np.ndarray, float, int]:
-    n = Ms[0].shape[0]
-    uniform = _uniform_lift(Ms, np.zeros(n), target)
-    best, upper, lower = np.full(n, uniform), n * uniform, 0.0
-    if uniform == 0.0:
-        return np.zeros(n), 0.0, 0
-    cuts, rhs = [], []
-    a = np.zeros(n)
-    for iteration in range(1, MAX_CUTS + 1):
+    def cuts(a: np.ndarray) -> list[tuple[float, np.ndarray]]:
+        found = []
         for M in Ms:  # one cut per violated configuration
             w, vectors = np.linalg.eigh(M + np.diag(a))
             g = w[-1] - target * w[0]
             if g > 0:
-                grad = vectors[:, -1] ** 2 - target * vectors[:, 0] ** 2
-                cuts.append(grad)
-                rhs.append(grad @ a - g)
+                found.append((g, vectors[:, -1] ** 2 - target * vectors[:, 0] ** 2))
+        return found
+
+    n = Ms[0].shape[0]
+    return least_total(cuts, lambda a: _uniform_lift(Ms, a, target), n, rtol)
+
+
+def least_total(
+    cuts: Callable[[np.ndarray], list[tuple[float, np.ndarray]]],
+    lift: Callable[[np.ndarray], float],
+    n: int,
+    rtol: float,
+) -> tuple[np.ndarray, float, int]:
+    """Least Σ a_i, a ≥ 0, under convex constraints g_k(a) ≤ 0, by Kelley's cutting planes.
+
+    Args:
+        cuts: (g_k(a), ∇g_k(a)) of each constraint violated at a (empty when a is feasible).
+        lift: The least uniform value that makes a + value feasible (closed form, ≥ 0).
+        n: Number of coordinates.
+        rtol: Relative gap between the bounds at which to stop.
+
+    Returns:
+        The best feasible a found, a lower bound on the least total, and the LPs solved.
+    """
+    uniform = lift(np.zeros(n))
+    best, upper, lower = np.full(n, uniform), n * uniform, 0.0
+    if uniform == 0.0:
+        return np.zeros(n), 0.0, 0
+    rows, rhs = [], []
+    a = np.zeros(n)
+    for iteration in range(1, MAX_CUTS + 1):
+        for g, grad in cuts(a):
+            rows.append(grad)
+            rhs.append(grad @ a - g)
         lp = linprog(
-            np.ones(n), A_ub=np.array(cuts), b_ub=np.array(rhs), bounds=[(0, n * uniform)] * n
+            np.ones(n), A_ub=np.array(rows), b_ub=np.array(rhs), bounds=[(0, n * uniform)] * n
         )
         if lp.status != 0:  # the uniform point is feasible, so the LP is; a solver failure
             raise ConditioningError(f"the armature LP failed: {lp.message}")
         a, lower = lp.x, max(lower, float(lp.fun))
-        lifted = a + _uniform_lift(Ms, a, target)
+        lifted = a + lift(a)
         if lifted.sum() < upper:
             best, upper = lifted, float(lifted.sum())
         if upper - lower <= rtol * upper:

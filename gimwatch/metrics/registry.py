@@ -345,6 +345,55 @@ class Diagonal(Metric):
         return state.diag.copy()
 
 
+class StabilityMargin(Metric):
+    """h/h*: the robot's timestep over the largest stable one of its integrator, at q.
+
+    For an MJCF robot with servos (`gimwatch.stability`): the file's actuators, joint springs
+    and dampers, ``<option timestep integrator>``, and gravity's stiffness at q; M is the
+    sample's M (armature in). Above 1 the integration is unstable there (alarm threshold 1).
+    Each sample scans and bisects h (hundreds of 2nv × 2nv eigen-solves): sample sparingly.
+    """
+
+    name = "stability_margin"
+
+    def __init__(self) -> None:
+        self.servos = None
+        self.data = None
+
+    def __call__(self, state):
+        # imported here: only a watch of this metric pays for the stability package
+        from gimwatch.stability.analysis import DEFAULT_TIMESTEP_S
+        from gimwatch.stability.linear_system import LinearSystem, linearise
+        from gimwatch.stability.timestep import max_stable_timestep
+
+        robot = state.robot
+        if self.servos is None:
+            self.servos, self.data = _file_servos(robot, state.q), robot.new_data()
+        servos = self.servos
+        held = linearise(robot.model, servos, state.q, data=self.data)
+        system = LinearSystem(state.M, held.stiffness, held.explicit_damping, held.joint_damping)
+        h_star = max_stable_timestep(system, servos.integrator or "Euler")
+        h = servos.timestep_s or DEFAULT_TIMESTEP_S
+        return h / h_star if h_star > 0 else math.inf
+
+
+def _file_servos(robot, q):
+    """The servos of an MJCF robot's file, holding q (refused for other robots)."""
+    from gimwatch.errors import InputError
+    from gimwatch.model.mjcf_compiled import compile_mjcf
+    from gimwatch.stability.analysis import held_controls
+    from gimwatch.stability.servos import mjcf_servos
+
+    if robot is None or not robot.mujoco_joints or q is None:
+        raise InputError(
+            "metric 'stability_margin'", "watched on an MJCF robot with its q", "another watch"
+        )
+    mj_model = compile_mjcf(robot.source)
+    if mj_model.nu == 0:
+        raise InputError("metric 'stability_margin'", "watched on a robot with actuators", 0)
+    return mjcf_servos(robot, mj_model, held_controls(mj_model, q))
+
+
 #: The registry: metric name -> class.
 METRICS: dict[str, type[Metric]] = {
     cls.name: cls
@@ -359,6 +408,7 @@ METRICS: dict[str, type[Metric]] = {
         Rcond,
         Eigenvalues,
         Diagonal,
+        StabilityMargin,
     )
 }
 
