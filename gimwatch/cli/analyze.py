@@ -152,9 +152,9 @@ def _notes(analysis) -> None:
     if analysis.mixed_units:
         lengths, angles = analysis.units
         print(
-            f"gimwatch: note: {first.robot} mixes units ({lengths} coordinates in m, {angles} in "
-            "rad): kappa and diagonal_ratio depend on the unit of length, kappa_equilibrated "
-            "does not",
+            f"gimwatch: note: {first.robot} mixes units ({lengths} coordinates are lengths, "
+            f"{angles} angles): kappa and diagonal_ratio depend on the unit of length, "
+            "kappa_equilibrated does not",
             file=sys.stderr,
         )
     if analysis.path == "denoc" and analysis.chosen:
