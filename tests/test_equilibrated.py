@@ -161,3 +161,30 @@ def test_cholesky_loses_digits_by_kappa_s_not_kappa():
     kappa, kappa_s = np.linalg.cond(M), _kappa_s_of(M)
     assert kappa > 1e11 and kappa_s < 10
     assert error < 10 * kappa_s * EPS < 1e-6 * kappa * EPS
+
+
+def test_explain_modes_of_s():
+    from gimwatch.explain.modes import gim_modes
+
+    robot = load_robot("panda")
+    q = random_configurations(robot, 1, seed=4)[0]
+    M = pin.crba(robot.model, robot.model.createData(), q)
+    M = np.triu(M) + np.triu(M, 1).T
+    modes = gim_modes(robot, q, metric="kappa_equilibrated")
+    assert modes.kappa == pytest.approx(_kappa_s(M), rel=1e-10)
+    u = np.array(modes.lowest.vector)
+    v = u / np.sqrt(np.diag(M))
+    assert v @ M @ v == pytest.approx(modes.lowest.eigenvalue, rel=1e-10)  # S u = μ u
+    assert sum(p for _, p in modes.lowest.joints) == pytest.approx(1.0)
+
+
+def test_survey_samples_kappa_s():
+    from gimwatch.survey.run import sample_metrics
+
+    robot = load_robot("ur5")
+    qs = random_configurations(robot, 3, seed=9)
+    values = sample_metrics(robot, qs)["kappa_equilibrated"]
+    data = robot.model.createData()
+    for q, value in zip(qs, values, strict=True):
+        M = pin.crba(robot.model, data, q)
+        assert value == pytest.approx(_kappa_s(np.triu(M) + np.triu(M, 1).T), rel=1e-9)
