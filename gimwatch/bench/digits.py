@@ -67,18 +67,20 @@ def _cases(quick: bool) -> list[tuple[str, str, bool]]:
 
     taper = np.geomspace(1.0, 0.01, 10)
     heavy = np.r_[100.0, np.full(9, 0.05)]
+    heavier = np.r_[1e4, np.full(9, 1e-3)]  # 1e7 between base and leaves
     near = np.r_[1.0, 1e-4, np.ones(8)]  # joints 2 and 3 nearly on one axis
+    nearer = np.r_[1.0, 1e-6, np.ones(8)]
+    slides = ["revolute", "prismatic"] * 4
     cases = [
         ("chain_10", _chain(10), False),
         ("chain_20", _chain(20), False),
+        ("chain_40", _chain(40), False),
         ("tapered_10", _chain(10, mass_kg=2.2 * taper, length_m=np.geomspace(1, 0.1, 10)), False),
         ("heavy_base_10", _chain(10, mass_kg=heavy), False),
+        ("heavy_base_1e7_10", _chain(10, mass_kg=heavier), False),
         ("near_axes_10", _chain(10, length_m=near, mass_kg=2.2 * near), False),
-        (
-            "spatial_slide_8",
-            _chain(8, axes="spatial", joint_types=["revolute", "prismatic"] * 4),
-            False,
-        ),
+        ("near_axes_1e-6_10", _chain(10, length_m=nearer, mass_kg=2.2 * nearer), False),
+        ("spatial_slide_8", _chain(8, axes="spatial", joint_types=slides), False),
     ]
     robots = [("ur5", False), ("panda", False), ("ur5", True), ("solo12", True)]
     if not quick:
