@@ -33,7 +33,15 @@ from gimwatch.metrics.conditioning import condition_number, diagonal_ratio, pivo
 from gimwatch.metrics.equilibrated import equilibrated_extremes
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
 
-__all__ = ["COLUMNS", "SOLVERS", "run", "scaled_urdf"]
+__all__ = [
+    "COLUMNS",
+    "SOLVERS",
+    "case_table",
+    "run",
+    "scaled_urdf",
+    "solver_table",
+    "summary_by_solver",
+]
 
 SOLVERS = ("crba_cho_solve", "crba_pin_ldlt", "aba", "denoc", "mujoco_solveM")
 COLUMNS = (
@@ -194,7 +202,7 @@ def _mujoco_rows(mj, q: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray, np.nda
     return M, tau, x[0]
 
 
-def _case_rows(table, name, xml, floating, unit, samples, seed) -> None:
+def _case_rows(table, name, xml, floating, unit, configurations, seed) -> None:
     from gimwatch.denoc import DenocModel
 
     model = _model(xml, floating)
@@ -207,8 +215,8 @@ def _case_rows(table, name, xml, floating, unit, samples, seed) -> None:
     mj = None if floating else _mujoco(xml)
     rng = np.random.default_rng(seed)
     scale = np.where(_length_coordinates(model), UNITS[unit], 1.0)
-    for k, q_m in enumerate(_configurations(model, samples, seed)):
-        q = q_m * scale  # the same configuration, lengths in the case's unit
+    for k, q_m in enumerate(configurations):
+        q = q_m * scale  # the same configuration as in metres, lengths in the case's unit
         M = pin.crba(model, data, q)
         M = np.triu(M) + np.triu(M, 1).T
         tau = M @ rng.standard_normal(model.nv)  # a q̈ of every coordinate, in its unit
@@ -256,10 +264,11 @@ def run(context: BenchContext) -> SectionResult:
     samples = 1 if context.quick else 3
     table = Table("digits", COLUMNS)
     for name, xml_m, floating in _cases(context.quick):
+        configurations = _configurations(_model(xml_m, floating), samples, context.seed)
         for unit, factor in UNITS.items():
             context.progress(f"  {name} ({unit})")
             xml = xml_m if factor == 1.0 else scaled_urdf(xml_m, factor)
-            _case_rows(table, name, xml, floating, unit, samples, context.seed)
+            _case_rows(table, name, xml, floating, unit, configurations, context.seed)
     figure = plot_digits(table.rows, context.output / "digits.png")
     return _result(table, figure)
 
@@ -280,8 +289,25 @@ def summary_by_solver(rows: list[dict]) -> dict[str, dict[str, float]]:
     return out
 
 
-def _result(table: Table, figure) -> SectionResult:
-    summary = summary_by_solver(table.rows)
+def _numeric(rows: list[dict]) -> list[dict]:
+    """Rows as read back from the CSV (strings) or as measured: floats where numbers."""
+    out = []
+    for row in rows:
+        parsed = {}
+        for key, value in row.items():
+            try:
+                parsed[key] = value if key in ("case", "unit", "solver") else float(value)
+            except (TypeError, ValueError):
+                parsed[key] = value
+        out.append(parsed)
+    return out
+
+
+def solver_table(rows: list[dict]) -> str:
+    """Per solver, worst over every case and unit: the Markdown table the findings quote."""
+    wide = [{"solver": s, **v} for s, v in summary_by_solver(_numeric(rows)).items()]
+    for row in wide:
+        row["rows"] = int(row["rows"])
     columns = {
         "solver": "solver",
         "rows": "rows",
@@ -289,12 +315,59 @@ def _result(table: Table, figure) -> SectionResult:
         "max_energy_error_over_kappa_s_eps": "max energy error/(κ_S·eps)",
         "max_digits_lost": "max digits lost",
     }
-    wide = [{"solver": s, **v} for s, v in summary.items()]
+    return markdown_table(wide, columns)
+
+
+def case_table(rows: list[dict]) -> str:
+    """Per case and unit, at its worst sample: the predictors and the worst solver's errors."""
+    rows = _numeric(rows)
+    wide = []
+    for case in dict.fromkeys(r["case"] for r in rows):
+        for unit in UNITS:
+            mine = [r for r in rows if r["case"] == case and r["unit"] == unit]
+            if not mine:
+                continue
+            worst = max(mine, key=lambda r: r["rel_error"])
+            same_m = [r for r in mine if r["sample"] == worst["sample"]]
+            base = next(r for r in same_m if r["solver"] == "crba_cho_solve")
+            wide.append(
+                {
+                    "case": case,
+                    "unit": unit,
+                    "nv": int(base["nv"]),
+                    **{k: base[k] for k in ("kappa", "kappa_equilibrated", "diagonal_ratio")},
+                    "pivot_ratio_backward": base["pivot_ratio_backward"],
+                    "rel_error": worst["rel_error"],
+                    "solver": worst["solver"],
+                    "energy": max(r["energy_error_over_kappa_s_eps"] for r in same_m),
+                }
+            )
+    columns = {
+        "case": "case",
+        "unit": "unit",
+        "nv": "nv",
+        "kappa": "κ",
+        "kappa_equilibrated": "κ_S",
+        "diagonal_ratio": "δ",
+        "pivot_ratio_backward": "pivot ratio (UDUᵀ)",
+        "rel_error": "worst error",
+        "solver": "by",
+        "energy": "worst energy error/(κ_S·eps)",
+    }
+    return markdown_table(wide, columns)
+
+
+def _result(table: Table, figure) -> SectionResult:
+    summary = summary_by_solver(table.rows)
     text = [
         "Error of q̈ = M⁻¹τ against an mpmath solve (60 digits) of the same float M and τ, "
         "in metres and millimetres; energy error in the D^1/2-weighted norm.",
         "",
-        markdown_table(wide, columns),
+        solver_table(table.rows),
+        "",
+        "Per case (M's predictors at the sample where a solver erred most):",
+        "",
+        case_table(table.rows),
     ]
     return SectionResult(
         name="digits",
@@ -302,6 +375,6 @@ def _result(table: Table, figure) -> SectionResult:
         tables=[table],
         figures=[figure],
         markdown="\n".join(text),
-        headline="\n".join(text),
+        headline="\n".join(text[:3]),
         summary=summary,
     )
