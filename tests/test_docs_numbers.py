@@ -1286,3 +1286,84 @@ def test_explain_page_quotes_the_committed_map_timings():
         f"{float(chain['us_per_point']) / 1000:.1f}",
     )
     assert (arm["grid"], chain["grid"], chain["nv"]) == ("200", "100", "1000")
+
+
+def test_digits_page_quotes_the_committed_study():
+    """docs/findings/digits.md: both tables are what `gimwatch bench digits` makes of the
+    committed CSV, and every figure its prose quotes is read off that CSV."""
+    from gimwatch.bench import digits
+
+    rows = _csv("digits/digits.csv")
+    N = r"(\d(?:[\d.e+-]*\d)?)"  # a figure, without the sentence's full stop
+    page = "docs/findings/digits.md"
+    for line in digits.solver_table(rows).splitlines() + digits.case_table(rows).splitlines():
+        assert line in _text(page), f"{page}: table line not in the page: {line}"
+
+    def g(value: float) -> str:
+        return f"{value:.3g}"
+
+    def row(case: str, unit: str) -> list[str]:
+        table = digits.case_table(rows).splitlines()
+        line = next(x for x in table if x.startswith(f"| {case} | {unit} |"))
+        return [c.strip() for c in line.strip("|").split("|")]
+
+    energy = max(float(r["energy_error_over_kappa_s_eps"]) for r in rows)
+    plain = max(float(r["rel_error_over_kappa_eps"]) for r in rows)
+    assert _find(page, rf"exceeded\s+{N}·κ_S·eps").group(1) == g(energy)
+    assert _find(page, rf"below {N}·κ·eps").group(1) == g(plain)
+    heavy, chain = row("heavy_base_1e7_10", "m"), row("chain_10", "mm")
+    match = _find(
+        page,
+        rf"has κ = {N} and a worst error\s+of {N}, no worse than the uniform "
+        rf"chain_10 \({N} at κ = {N}\)",
+    )
+    assert list(match.groups()) == [heavy[3], heavy[7], chain[7], chain[3]]
+    assert _find(page, rf"δ = {N} on the heavy base comes").group(1) == heavy[5]
+    panda_m, panda_mm = row("panda", "m"), row("panda", "mm")
+    match = _find(page, rf"millimetres has κ = {N} \(κ·eps ≈ [\d.e-]+\) and a worst error of {N}")
+    assert list(match.groups()) == [panda_mm[3], panda_mm[7]]
+    match = _find(
+        page,
+        rf"goes from κ = {N} to\s+κ = {N} and δ from {N} to {N}; "
+        rf"κ_S stays {N}",
+    )
+    assert list(match.groups()) == [panda_m[3], panda_mm[3], panda_m[5], panda_mm[5], panda_m[4]]
+    assert panda_m[4] == panda_mm[4]
+    floating_m, floating_mm = row("ur5_floating", "m"), row("ur5_floating", "mm")
+    match = _find(page, rf"κ = {N} in\s+metres, {N} in millimetres, κ_S = {N} in both")
+    assert list(match.groups()) == [floating_m[3], floating_mm[3], floating_m[4]]
+    assert floating_m[4] == floating_mm[4]
+    worst = {
+        s: max(float(r["energy_error_over_kappa_s_eps"]) for r in rows if r["solver"] == s)
+        for s in ("aba", "denoc")
+    }
+    match = _find(page, rf"\({N} for ABA, {N} for DeNOC, both on ur5 in metres")
+    assert list(match.groups()) == [g(worst["aba"]), g(worst["denoc"])]
+    near = row("near_axes_1e-6_10", "m")
+    assert _find(page, rf"δ = {N} on near-coincident axes").group(1) == near[5]
+    eps = float(np.finfo(float).eps)
+    kappa_eps = _find(page, r"κ = [\d.e+]+ \(κ·eps ≈ (\d+e-\d+)\)").group(1)
+    assert float(kappa_eps) == float(f"{float(panda_mm[3]) * eps:.0e}")
+    near_s = [float(row("near_axes_1e-6_10", u)[4]) for u in ("m", "mm")]
+    match = _find(
+        page, rf"κ_S ≈ {N}, κ_S·eps ≈ {N}, and every solver lost {N} to {N} digits at its worst"
+    )
+    assert float(match.group(1)) == float(f"{near_s[0]:.0e}") == float(f"{near_s[1]:.0e}")
+    assert float(match.group(2)) == round(near_s[0] * eps, 1)
+    lost = {}
+    for r in rows:
+        if r["case"] == "near_axes_1e-6_10":
+            lost[r["solver"]] = max(lost.get(r["solver"], 0.0), float(r["rel_error"]))
+    digits_lost = np.log10(np.array(list(lost.values())) / eps)
+    assert [int(match.group(3)), int(match.group(4))] == [
+        int(digits_lost.min()),
+        int(digits_lost.max()),
+    ]
+    cholesky = max(
+        float(r["energy_error_over_kappa_s_eps"])
+        for r in rows
+        if r["solver"] in ("crba_cho_solve", "crba_pin_ldlt")
+    )
+    ratios = [worst["aba"] / cholesky, worst["denoc"] / cholesky]
+    assert _find(page, r"are two\s+to four times Cholesky's")
+    assert 2 <= min(ratios) and max(ratios) <= 4
