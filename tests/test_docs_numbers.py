@@ -1367,3 +1367,63 @@ def test_digits_page_quotes_the_committed_study():
     ratios = [worst["aba"] / cholesky, worst["denoc"] / cholesky]
     assert _find(page, r"are two\s+to four times Cholesky's")
     assert 2 <= min(ratios) and max(ratios) <= 4
+
+
+def test_claims_table_quotes_the_digits_study():
+    """The premise table of docs/findings/claims.md: each verdict's figure from the CSV."""
+    from gimwatch.bench import digits
+
+    rows = _csv("digits/digits.csv")
+    N = r"(\d(?:[\d.e+-]*\d)?)"
+    claims = "docs/findings/claims.md"
+    table = digits.case_table(rows).splitlines()
+
+    def row(case: str, unit: str) -> list[str]:
+        line = next(x for x in table if x.startswith(f"| {case} | {unit} |"))
+        return [c.strip() for c in line.strip("|").split("|")]
+
+    def g(value: float) -> str:
+        return f"{value:.3g}"
+
+    cases = {r["case"] for r in rows}
+    assert int(_find(claims, rf"five solvers, {N} cases").group(1)) == len(cases)
+    plain = max(float(r["rel_error_over_kappa_eps"]) for r in rows)
+    energy = max(float(r["energy_error_over_kappa_s_eps"]) for r in rows)
+    heavy, near = row("heavy_base_1e7_10", "m"), row("near_axes_1e-6_10", "m")
+    match = _find(claims, rf"every error ≤ {N}·κ·eps; heavy base κ = {N}, worst error {N}")
+    assert list(match.groups()) == [g(plain), heavy[3], heavy[7]]
+    assert _find(claims, rf"every error ≤ {N}·κ_S·eps").group(1) == g(energy)
+    assert _find(claims, rf"heavy base δ = {N} with chain_10's errors").group(1) == heavy[5]
+    assert _find(claims, rf"near-coincident axes δ = {N} with").group(1) == near[5]
+    match = _find(claims, rf"{N} on the heavy base \(no extra loss\), {N} on near-coincident")
+    assert list(match.groups()) == [heavy[6], near[6]]
+    panda_m, panda_mm = row("panda", "m"), row("panda", "mm")
+    match = _find(claims, rf"κ {N} → {N}, κ_S {N} in both")
+    assert list(match.groups()) == [panda_m[3], panda_mm[3], panda_m[4]]
+    worst = [
+        g(max(float(r["energy_error_over_kappa_s_eps"]) for r in rows if r["solver"] == s))
+        for s in ("aba", "denoc")
+    ]
+    assert list(_find(claims, rf"worst {N} and {N}·κ_S·eps").groups()) == worst
+    ur5, chain = row("ur5", "m"), row("chain_20", "m")
+    assert list(_find(claims, rf"ur5 has κ = {N} and\s+κ_S = {N}").groups()) == ur5[3:5]
+    match = _find(claims, rf"chain_20: κ = {N}, κ_S = {N}")
+    assert list(match.groups()) == chain[3:5]
+
+
+def test_readme_why_it_matters_quotes_the_digits_study():
+    from gimwatch.bench import digits
+
+    rows = _csv("digits/digits.csv")
+    N = r"(\d(?:[\d.e+-]*\d)?)"
+    energy = max(float(r["energy_error_over_kappa_s_eps"]) for r in rows)
+    assert _find("README.md", rf"stayed within {N}·κ_S·eps").group(1) == f"{energy:.3g}"
+    table = digits.case_table(rows).splitlines()
+    cells = [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line in table
+        if line.startswith(("| panda | m |", "| panda | mm |"))
+    ]
+    match = _find("README.md", rf"panda in millimetres: κ {N} → {N}, κ_S {N} in both")
+    assert list(match.groups()) == [cells[0][3], cells[1][3], cells[0][4]]
+    assert cells[0][4] == cells[1][4]
