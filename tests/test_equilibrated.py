@@ -188,3 +188,25 @@ def test_survey_samples_kappa_s():
     for q, value in zip(qs, values, strict=True):
         M = pin.crba(robot.model, data, q)
         assert value == pytest.approx(_kappa_s(np.triu(M) + np.triu(M, 1).T), rel=1e-9)
+
+
+def test_the_watch_and_a_map_report_kappa_s():
+    from gimwatch.explain.maps import metrics_at
+    from gimwatch.watch.watch import Watch
+
+    robot = load_robot("ur5")
+    qs = random_configurations(robot, 2, seed=11)
+    watch = Watch(robot, ("kappa", "kappa_equilibrated"))
+    data = robot.model.createData()
+    expected = []
+    for t, q in enumerate(qs):
+        watch.sample(float(t), q)
+        M = pin.crba(robot.model, data, q)
+        expected.append(_kappa_s(np.triu(M) + np.triu(M, 1).T))
+    np.testing.assert_allclose(watch.array("kappa_equilibrated"), expected, rtol=1e-9)
+    dense = metrics_at("ur5", "crba", qs, ("kappa_equilibrated",))
+    np.testing.assert_allclose(dense[0], expected, rtol=1e-9)
+    chain = np.array([[0.3, -0.2, 0.5], [1.0, 0.1, -0.4]])
+    linear = metrics_at("chain:3", "denoc", chain, ("kappa_equilibrated", "kappa"))
+    references = [_kappa_s(rod_chain_gim(q)) for q in chain]
+    np.testing.assert_allclose(linear[0], references, rtol=1e-8)
