@@ -210,3 +210,10 @@ def test_the_watch_and_a_map_report_kappa_s():
     linear = metrics_at("chain:3", "denoc", chain, ("kappa_equilibrated", "kappa"))
     references = [_kappa_s(rod_chain_gim(q)) for q in chain]
     np.testing.assert_allclose(linear[0], references, rtol=1e-8)
+
+
+def test_the_analyze_guide_quotes_the_units_note(capsys):
+    assert main(["analyze", "solo12"]) == 0
+    note = capsys.readouterr().err.strip().splitlines()[0]
+    page = Path(__file__).resolve().parents[1] / "docs" / "guide" / "analyze.md"
+    assert note in page.read_text(encoding="utf-8").splitlines()
