@@ -217,3 +217,20 @@ def test_the_analyze_guide_quotes_the_units_note(capsys):
     note = capsys.readouterr().err.strip().splitlines()[0]
     page = Path(__file__).resolve().parents[1] / "docs" / "guide" / "analyze.md"
     assert note in page.read_text(encoding="utf-8").splitlines()
+
+
+@pytest.mark.parametrize("spec", ["chain:30", "panda"])
+def test_the_watch_tracks_kappa_s_at_o_n(spec):
+    from gimwatch.watch.watch import Watch
+
+    robot = load_robot(spec)
+    qs = random_configurations(robot, 4, seed=13)
+    watch = Watch(robot, ("kappa_equilibrated_tracked",))
+    data = robot.model.createData()
+    expected = []
+    for t, q in enumerate(qs):
+        watch.sample(float(t), q)
+        M = pin.crba(robot.model, data, q)
+        expected.append(_kappa_s(np.triu(M) + np.triu(M, 1).T))
+    assert not watch.full  # M is never formed
+    np.testing.assert_allclose(watch.array("kappa_equilibrated_tracked"), expected, rtol=1e-8)

@@ -37,6 +37,7 @@ __all__ = [
     "equilibrated",
     "equilibrated_dense",
     "equilibrated_extremes",
+    "equilibrated_tracker",
 ]
 
 
@@ -131,3 +132,34 @@ class ScaledProducts:
 def equilibrated_dense(dense: Callable[[np.ndarray], np.ndarray]):
     """``q ↦ S(q)`` from ``q ↦ M(q)``: the κ tracker's dense fallback, on S."""
     return lambda q: equilibrated(dense(q))
+
+
+def equilibrated_tracker(robot, dynamics=None, data=None, lean=None):
+    """A [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] of κ_S along a trajectory.
+
+    S·x and S⁻¹·y from the cheapest provider of M's O(n) products (DeNOC's compiled model,
+    else Pinocchio's RNEA/ABA) and the O(n) diagonal of the same model; the dense fallback
+    equilibrates Pinocchio's CRBA (or the backend's) M.
+
+    Args:
+        robot: The robot.
+        dynamics: A simulation backend (its ``gim`` and lean model are reused).
+        data: A Pinocchio Data to reuse.
+        lean: DeNOC's compiled model, when the caller has one.
+    """
+    from gimwatch.metrics.tracker import KappaTracker
+    from gimwatch.metrics.tracker.providers import gim_products
+    from gimwatch.model.inertia import gim, gim_diagonal
+
+    provider = lean or gim_products(robot, dynamics, data)
+    if hasattr(provider, "gim_diagonal"):  # DeNOC's model: its own O(n) diagonal
+        diagonal = provider.gim_diagonal
+    else:
+        own = robot.new_data() if data is None else data
+        diagonal = lambda q: gim_diagonal(robot, q, data=own)  # noqa: E731
+
+    def dense(q: np.ndarray) -> np.ndarray:
+        return gim(robot, q, data=data) if dynamics is None else dynamics.gim(q)
+
+    products = ScaledProducts(provider, diagonal)
+    return KappaTracker(products, robot.nv, dense=equilibrated_dense(dense))

@@ -222,6 +222,23 @@ class KappaEquilibrated(Metric):
         return conditioning.extreme_ratio(state.equilibrated_extremes)
 
 
+class KappaEquilibratedTracked(Metric):
+    """κ_S tracked at O(n) per sample: the κ tracker on D^-1/2 M D^-1/2 (no M formed)."""
+
+    name = "kappa_equilibrated_tracked"
+    full = False
+
+    def __init__(self) -> None:
+        self.tracker = None
+
+    def __call__(self, state):
+        if self.tracker is None:
+            self.tracker = equilibrated.equilibrated_tracker(
+                state.robot, state.dynamics, state.data, state.lean
+            )
+        return self.tracker.sample(state.q).kappa
+
+
 class KappaLanczos(Metric):
     """κ₂ = λmax / λmin (Eq. 6) by low-accuracy Lanczos on the RNEA and ABA operators.
 
@@ -377,6 +394,7 @@ METRICS: dict[str, type[Metric]] = {
     for cls in (
         Kappa,
         KappaEquilibrated,
+        KappaEquilibratedTracked,
         KappaLanczos,
         KappaTracked,
         DiagonalRatio,
