@@ -196,7 +196,7 @@ def _mujoco_rows(mj, q: np.ndarray, rng) -> tuple[np.ndarray, np.ndarray, np.nda
     mujoco.mj_forward(mj, data)
     M = np.zeros((mj.nv, mj.nv))
     mujoco.mj_fullM(mj, data, M)
-    tau = rng.uniform(-1.0, 1.0, mj.nv)
+    tau = M @ rng.standard_normal(mj.nv)  # as for the other solvers: a q̈ of every coordinate
     x = np.zeros((1, mj.nv))
     mujoco.mj_solveM(mj, data, x, tau[None, :].copy())
     return M, tau, x[0]
