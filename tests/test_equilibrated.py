@@ -234,3 +234,11 @@ def test_the_watch_tracks_kappa_s_at_o_n(spec):
         expected.append(_kappa_s(np.triu(M) + np.triu(M, 1).T))
     assert not watch.full  # M is never formed
     np.testing.assert_allclose(watch.array("kappa_equilibrated_tracked"), expected, rtol=1e-8)
+
+
+def test_the_o_n_path_notes_mixed_units_of_a_file(capsys):
+    arm = str(UNITS / "slider_arm_m.urdf")
+    assert main(["analyze", arm, "--backend", "denoc", "--q", "0.3", "-0.8", "1.1", "0.025"]) == 0
+    assert "mixes units (1 length and 3 angle coordinates)" in capsys.readouterr().err
+    assert not analyze("chain:5", backend="denoc").mixed_units
+    assert analyze("chain:4", backend="crba").units == (0, 4)

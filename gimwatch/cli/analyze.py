@@ -152,8 +152,8 @@ def _notes(analysis) -> None:
     if analysis.mixed_units:
         lengths, angles = analysis.units
         print(
-            f"gimwatch: note: {first.robot} mixes units ({lengths} coordinates are lengths, "
-            f"{angles} angles): kappa and diagonal_ratio depend on the unit of length, "
+            f"gimwatch: note: {first.robot} mixes units ({lengths} length and {angles} angle "
+            "coordinates): kappa and diagonal_ratio depend on the unit of length, "
             "kappa_equilibrated does not",
             file=sys.stderr,
         )

@@ -116,8 +116,12 @@ def _robot_configurations(robot, q, random, seed, key, spec) -> list:
     return _configurations(q, random, seed, robot.nq, neutral, draw, robot, key=key, spec=spec)
 
 
-def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> list[GimAnalysis]:
-    """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
+def _linear(spec, q, random, seed, metrics, floating, key, body, armature):
+    """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model.
+
+    Returns:
+        The analyses, and (coordinates in m, coordinates in rad).
+    """
     from gimwatch.denoc import DenocModel
     from gimwatch.metrics.linear_analysis import (
         LINEAR_METRICS,
@@ -133,6 +137,8 @@ def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> li
         if chain.n > LINEAR_NV_LIMIT:
             raise InputError("the N of chain:N", f"at most {LINEAR_NV_LIMIT}", chain.n)
         model, name = DenocModel.from_chain(chain), chain.name
+        slides = sum(kind == "prismatic" for kind in chain.joint_types)
+        units = (slides, chain.n - slides)
         qs = _configurations(
             q,
             random,
@@ -152,9 +158,9 @@ def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> li
         model = DenocModel.from_urdf(
             robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
         )
-        name = robot.name
+        name, units = robot.name, velocity_units(robot.model)
         qs = _robot_configurations(robot, q, random, seed, key, spec)
-    return [analyze_linear(model, x, name=name, metrics=metrics, seed=seed) for x in qs]
+    return [analyze_linear(model, x, name=name, metrics=metrics, seed=seed) for x in qs], units
 
 
 def analyze(
@@ -195,11 +201,7 @@ def analyze(
         raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
     placeholders: tuple[str, ...] = ()
     if path == "denoc":
-        results = _linear(spec, q, random, seed, metrics, floating, key, body, armature)
-        chain = parse_chain_spec(spec)
-        kinds = chain.joint_types if chain is not None else ()
-        slides = sum(kind == "prismatic" for kind in kinds)
-        units = (slides, len(kinds) - slides)
+        results, units = _linear(spec, q, random, seed, metrics, floating, key, body, armature)
     else:
         robot = load_robot(
             spec, floating=floating, max_nv=DATA_NV_LIMIT, body=body, armature=armature
