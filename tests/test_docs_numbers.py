@@ -1286,3 +1286,144 @@ def test_explain_page_quotes_the_committed_map_timings():
         f"{float(chain['us_per_point']) / 1000:.1f}",
     )
     assert (arm["grid"], chain["grid"], chain["nv"]) == ("200", "100", "1000")
+
+
+def test_digits_page_quotes_the_committed_study():
+    """docs/findings/digits.md: both tables are what `gimwatch bench digits` makes of the
+    committed CSV, and every figure its prose quotes is read off that CSV."""
+    from gimwatch.bench import digits
+
+    rows = _csv("digits/digits.csv")
+    N = r"(\d(?:[\d.e+-]*\d)?)"  # a figure, without the sentence's full stop
+    page = "docs/findings/digits.md"
+    for line in digits.solver_table(rows).splitlines() + digits.case_table(rows).splitlines():
+        assert line in _text(page), f"{page}: table line not in the page: {line}"
+
+    def g(value: float) -> str:
+        return f"{value:.3g}"
+
+    def row(case: str, unit: str) -> list[str]:
+        table = digits.case_table(rows).splitlines()
+        line = next(x for x in table if x.startswith(f"| {case} | {unit} |"))
+        return [c.strip() for c in line.strip("|").split("|")]
+
+    energy = max(float(r["energy_error_over_kappa_s_eps"]) for r in rows)
+    plain = max(float(r["rel_error_over_kappa_eps"]) for r in rows)
+    assert _find(page, rf"exceeded\s+{N}·κ_S·eps").group(1) == g(energy)
+    assert _find(page, rf"below {N}·κ·eps").group(1) == g(plain)
+    heavy, chain = row("heavy_base_1e7_10", "m"), row("chain_10", "mm")
+    match = _find(
+        page,
+        rf"has κ = {N} and a worst error\s+of {N}, no worse than the uniform "
+        rf"chain_10 \({N} at κ = {N}\)",
+    )
+    assert list(match.groups()) == [heavy[3], heavy[7], chain[7], chain[3]]
+    assert _find(page, rf"δ = {N} on the heavy base comes").group(1) == heavy[5]
+    panda_m, panda_mm = row("panda", "m"), row("panda", "mm")
+    match = _find(page, rf"millimetres has κ = {N} \(κ·eps ≈ [\d.e-]+\) and a worst error of {N}")
+    assert list(match.groups()) == [panda_mm[3], panda_mm[7]]
+    match = _find(
+        page,
+        rf"goes from κ = {N} to\s+κ = {N} and δ from {N} to {N}; "
+        rf"κ_S stays {N}",
+    )
+    assert list(match.groups()) == [panda_m[3], panda_mm[3], panda_m[5], panda_mm[5], panda_m[4]]
+    assert panda_m[4] == panda_mm[4]
+    floating_m, floating_mm = row("ur5_floating", "m"), row("ur5_floating", "mm")
+    match = _find(page, rf"κ = {N} in\s+metres, {N} in millimetres, κ_S = {N} in both")
+    assert list(match.groups()) == [floating_m[3], floating_mm[3], floating_m[4]]
+    assert floating_m[4] == floating_mm[4]
+    worst = {
+        s: max(float(r["energy_error_over_kappa_s_eps"]) for r in rows if r["solver"] == s)
+        for s in ("aba", "denoc")
+    }
+    match = _find(page, rf"\({N} for ABA, {N} for DeNOC, both on ur5 in metres")
+    assert list(match.groups()) == [g(worst["aba"]), g(worst["denoc"])]
+    near = row("near_axes_1e-6_10", "m")
+    assert _find(page, rf"δ = {N} on near-coincident axes").group(1) == near[5]
+    eps = float(np.finfo(float).eps)
+    kappa_eps = _find(page, r"κ = [\d.e+]+ \(κ·eps ≈ (\d+e-\d+)\)").group(1)
+    assert float(kappa_eps) == float(f"{float(panda_mm[3]) * eps:.0e}")
+    near_s = [float(row("near_axes_1e-6_10", u)[4]) for u in ("m", "mm")]
+    match = _find(
+        page, rf"κ_S ≈ {N}, κ_S·eps ≈ {N}, and every solver lost {N} to {N} digits at its worst"
+    )
+    assert float(match.group(1)) == float(f"{near_s[0]:.0e}") == float(f"{near_s[1]:.0e}")
+    assert float(match.group(2)) == round(near_s[0] * eps, 1)
+    lost = {}
+    for r in rows:
+        if r["case"] == "near_axes_1e-6_10":
+            lost[r["solver"]] = max(lost.get(r["solver"], 0.0), float(r["rel_error"]))
+    digits_lost = np.log10(np.array(list(lost.values())) / eps)
+    assert [int(match.group(3)), int(match.group(4))] == [
+        int(digits_lost.min()),
+        int(digits_lost.max()),
+    ]
+    cholesky = max(
+        float(r["energy_error_over_kappa_s_eps"])
+        for r in rows
+        if r["solver"] in ("crba_cho_solve", "crba_pin_ldlt")
+    )
+    ratios = [worst["aba"] / cholesky, worst["denoc"] / cholesky]
+    assert _find(page, r"are two\s+to four times Cholesky's")
+    assert 2 <= min(ratios) and max(ratios) <= 4
+
+
+def test_claims_table_quotes_the_digits_study():
+    """The premise table of docs/findings/claims.md: each verdict's figure from the CSV."""
+    from gimwatch.bench import digits
+
+    rows = _csv("digits/digits.csv")
+    N = r"(\d(?:[\d.e+-]*\d)?)"
+    claims = "docs/findings/claims.md"
+    table = digits.case_table(rows).splitlines()
+
+    def row(case: str, unit: str) -> list[str]:
+        line = next(x for x in table if x.startswith(f"| {case} | {unit} |"))
+        return [c.strip() for c in line.strip("|").split("|")]
+
+    def g(value: float) -> str:
+        return f"{value:.3g}"
+
+    cases = {r["case"] for r in rows}
+    assert int(_find(claims, rf"five solvers, {N} cases").group(1)) == len(cases)
+    plain = max(float(r["rel_error_over_kappa_eps"]) for r in rows)
+    energy = max(float(r["energy_error_over_kappa_s_eps"]) for r in rows)
+    heavy, near = row("heavy_base_1e7_10", "m"), row("near_axes_1e-6_10", "m")
+    match = _find(claims, rf"every error ≤ {N}·κ·eps; heavy base κ = {N}, worst error {N}")
+    assert list(match.groups()) == [g(plain), heavy[3], heavy[7]]
+    assert _find(claims, rf"every error ≤ {N}·κ_S·eps").group(1) == g(energy)
+    assert _find(claims, rf"heavy base δ = {N} with chain_10's errors").group(1) == heavy[5]
+    assert _find(claims, rf"near-coincident axes δ = {N} with").group(1) == near[5]
+    match = _find(claims, rf"{N} on the heavy base \(no extra loss\), {N} on near-coincident")
+    assert list(match.groups()) == [heavy[6], near[6]]
+    panda_m, panda_mm = row("panda", "m"), row("panda", "mm")
+    match = _find(claims, rf"κ {N} → {N}, κ_S {N} in both")
+    assert list(match.groups()) == [panda_m[3], panda_mm[3], panda_m[4]]
+    worst = [
+        g(max(float(r["energy_error_over_kappa_s_eps"]) for r in rows if r["solver"] == s))
+        for s in ("aba", "denoc")
+    ]
+    assert list(_find(claims, rf"worst {N} and {N}·κ_S·eps").groups()) == worst
+    ur5, chain = row("ur5", "m"), row("chain_20", "m")
+    assert list(_find(claims, rf"ur5 has κ = {N} and\s+κ_S = {N}").groups()) == ur5[3:5]
+    match = _find(claims, rf"chain_20: κ = {N}, κ_S = {N}")
+    assert list(match.groups()) == chain[3:5]
+
+
+def test_readme_why_it_matters_quotes_the_digits_study():
+    from gimwatch.bench import digits
+
+    rows = _csv("digits/digits.csv")
+    N = r"(\d(?:[\d.e+-]*\d)?)"
+    energy = max(float(r["energy_error_over_kappa_s_eps"]) for r in rows)
+    assert _find("README.md", rf"stayed within {N}·κ_S·eps").group(1) == f"{energy:.3g}"
+    table = digits.case_table(rows).splitlines()
+    cells = [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line in table
+        if line.startswith(("| panda | m |", "| panda | mm |"))
+    ]
+    match = _find("README.md", rf"panda in millimetres: κ {N} → {N}, κ_S {N} in both")
+    assert list(match.groups()) == [cells[0][3], cells[1][3], cells[0][4]]
+    assert cells[0][4] == cells[1][4]

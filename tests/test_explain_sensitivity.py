@@ -135,6 +135,36 @@ def test_every_sensitivity_matches_central_differences(robot):
         )
 
 
+def _kappa_s(model: pin.Model, q: np.ndarray) -> float:
+    M = pin.crba(model, model.createData(), q)
+    M = np.triu(M) + np.triu(M, 1).T
+    r = 1 / np.sqrt(np.diag(M))
+    w = np.linalg.eigvalsh(M * np.outer(r, r))
+    return w[-1] / w[0]
+
+
+def test_every_kappa_s_sensitivity_matches_central_differences(robot):
+    """∂κ_S/∂p (κ_S = κ of D^-1/2 M D^-1/2) vs central differences of NumPy's κ_S."""
+    q = _q(robot, 4)
+    result = kappa_sensitivities(robot, q, metric="kappa_equilibrated")
+    assert result.metric == "kappa_equilibrated" and not result.clustered
+    names = body_names(robot)
+    kappa = result.kappa
+    assert kappa == pytest.approx(_kappa_s(robot.model, q), rel=1e-10)
+    for s in result.sensitivities:
+        scale = max(abs(s.value), 0.1 if s.unit == "m" else 1e-2)
+        if s.parameter in INERTIA:
+            inertia = robot.model.inertias[names.index(s.owner) + 1].inertia
+            scale = min(scale, np.linalg.eigvalsh(inertia)[0])
+        h = 1e-4 * scale
+        plus = _kappa_s(_perturbed(robot.model, names, s.owner, s.parameter, s.value + h), q)
+        minus = _kappa_s(_perturbed(robot.model, names, s.owner, s.parameter, s.value - h), q)
+        fd = (plus - minus) / (2 * h)
+        assert s.dkappa == pytest.approx(fd, rel=1e-6, abs=1e-9 * kappa / scale), (
+            f"{s.owner}.{s.parameter}: exact {s.dkappa!r} vs differences {fd!r}"
+        )
+
+
 def test_mass_and_inertia_elasticities_sum_to_zero(robot):
     """M is linear and homogeneous in (m, I_c) at fixed c: scaling them all leaves κ."""
     result = kappa_sensitivities(robot, _q(robot, 2))

@@ -58,6 +58,7 @@ SECTIONS: dict[str, Section] = {
         Section("conditioning", "Conditioning cost vs n", "gimwatch.bench.conditioning_cost"),
         Section("estimators", "Estimator quality vs cost", "gimwatch.bench.estimators"),
         Section("accuracy", "Forward-dynamics accuracy vs κ", "gimwatch.bench.accuracy"),
+        Section("digits", "Digits lost per solver, and their predictor", "gimwatch.bench.digits"),
         Section(
             "dynamics",
             "Dynamics backends per step",

@@ -283,6 +283,43 @@ FIGURES: dict[str, tuple[str, Callable[[list[dict], Path], Path], Callable[[dict
 }
 
 
+def draw_digits(rows: list[dict], *, ax=None):
+    """Two panels: plain error vs κ and D^1/2-weighted error vs κ_S, one marker per solver."""
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        ax = Figure(figsize=(11.0, 4.5), layout="constrained").subplots(1, 2)
+    solvers = list(dict.fromkeys(r["solver"] for r in rows))
+    for panel, (key, error, label) in zip(
+        ax,
+        (
+            ("kappa", "rel_error", "κ₂(M)"),
+            ("kappa_equilibrated", "energy_error", "κ_S = κ₂(D^-1/2 M D^-1/2)"),
+        ),
+        strict=True,
+    ):
+        for i, solver in enumerate(solvers):
+            mine = [r for r in rows if r["solver"] == solver]
+            x = [r[key] for r in mine]
+            y = [max(r[error], EPS / 10) for r in mine]
+            panel.loglog(x, y, "osD^v"[i % 5], label=solver, markersize=4, alpha=0.7)
+        values = np.array([r[key] for r in rows])
+        line = np.geomspace(values.min(), values.max(), 50)
+        panel.loglog(line, line * EPS, "k--", label=f"{label.split(' =')[0]}·eps")
+        panel.set_xlabel(f"{label} [-]")
+        panel.set_ylabel(f"{'plain' if error == 'rel_error' else 'D^1/2-weighted'} error [-]")
+        panel.grid(True, which="both", alpha=0.3)
+        panel.legend(fontsize=7)
+    ax[0].set_title("error of q̈ = M⁻¹τ vs mpmath, against κ")
+    ax[1].set_title("energy-norm error against κ_S")
+    return ax
+
+
+def plot_digits(rows: list[dict], path: Path) -> Path:
+    """``digits.png``: `draw_digits`."""
+    return _save(draw_digits(rows)[0].figure, path)
+
+
 def _finite(value):
     return float("nan") if value is None else value
 

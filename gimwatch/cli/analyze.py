@@ -34,6 +34,7 @@ CSV_COLUMNS = (
     "diagonal_ratio",
     "pivot_ratio_forward",
     "pivot_ratio_backward",
+    "kappa_equilibrated",
     "lambda_min",
     "lambda_max",
     "max_diagonal_dof",
@@ -86,8 +87,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--metrics",
-        help="comma-separated subset of kappa,diagonal_ratio,pivot_ratio_backward to compute "
-        "on the O(n) path (default: all three)",
+        help="comma-separated subset of kappa,diagonal_ratio,pivot_ratio_backward,"
+        "kappa_equilibrated to compute on the O(n) path (default: all four)",
     )
 
 
@@ -148,6 +149,14 @@ def _notes(analysis) -> None:
     first = analysis.results[0]
     if analysis.placeholder_limits:
         print(f"gimwatch: note: {placeholder_note(analysis.placeholder_limits)}", file=sys.stderr)
+    if analysis.mixed_units:
+        lengths, angles = analysis.units
+        print(
+            f"gimwatch: note: {first.robot} mixes units ({lengths} length and {angles} angle "
+            "coordinates): kappa and diagonal_ratio depend on the unit of length, "
+            "kappa_equilibrated does not",
+            file=sys.stderr,
+        )
     if analysis.path == "denoc" and analysis.chosen:
         print(
             f"gimwatch: {first.robot} has nv = {first.nv} > {DATA_NV_LIMIT}: using the O(n) "
@@ -192,6 +201,7 @@ def _print_table(analysis) -> None:
         "diagonal_ratio",
         "pivot_ratio_forward",
         "pivot_ratio_backward",
+        "kappa_equilibrated",
         "lambda_min",
         "lambda_max",
         "max_diagonal_dof",
@@ -204,6 +214,7 @@ def _print_table(analysis) -> None:
             r.diagonal_ratio,
             r.pivot_ratio_forward,
             r.pivot_ratio_backward,
+            r.kappa_equilibrated,
             r.lambda_min,
             r.lambda_max,
             r.max_diagonal_dof,

@@ -7,6 +7,7 @@ import argparse
 from gimwatch.cli._format import positive_int, table
 from gimwatch.cli._records import json_text
 from gimwatch.explain.modes import GimModes, gim_modes
+from gimwatch.explain.sensitivity import METRICS as SENSITIVITY_METRICS
 from gimwatch.explain.sensitivity import KappaSensitivities, kappa_sensitivities
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, neutral_configuration
@@ -32,6 +33,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--top", type=positive_int, default=10, metavar="K", help="sensitivities listed"
     )
     parser.add_argument("--json", action="store_true", help="print JSON (every parameter)")
+    parser.add_argument(
+        "--metric",
+        choices=SENSITIVITY_METRICS,
+        default="kappa",
+        help="explain kappa (of M) or kappa_equilibrated (of D^-1/2 M D^-1/2, the digits a "
+        "Cholesky solve loses, in any units)",
+    )
 
 
 def mode_lines(modes: GimModes) -> list[str]:
@@ -64,12 +72,12 @@ def run(args: argparse.Namespace) -> int:
         if args.q is None
         else user_configuration(robot, args.q, key="--q")
     )
-    modes = gim_modes(robot, q)
-    result = kappa_sensitivities(robot, q)
+    modes = gim_modes(robot, q, metric=args.metric)
+    result = kappa_sensitivities(robot, q, metric=args.metric)
     if args.json:
         print(json_text({"modes": modes.to_dict(), "sensitivities": result.to_dict()}))
         return 0
-    print(f"{robot.name}: nv = {robot.nv}, kappa = {result.kappa:.6g}")
+    print(f"{robot.name}: nv = {robot.nv}, {args.metric} = {result.kappa:.6g}")
     for line in mode_lines(modes):
         print(line)
     if result.clustered:

@@ -22,7 +22,11 @@ from gimwatch.output.folders import ResultsFolder
 __all__ = ["plot_map", "plot_trajectory_metrics", "write_map", "write_trajectory_metrics"]
 
 #: How each metric is labelled on a figure.
-LABELS = {"kappa": "κ = λmax/λmin", "diagonal_ratio": "δ = max diag M / min diag M"}
+LABELS = {
+    "kappa": "κ = λmax/λmin",
+    "diagonal_ratio": "δ = max diag M / min diag M",
+    "kappa_equilibrated": "κ_S = κ(D^-1/2 M D^-1/2)",
+}
 
 
 def plot_map(result: ConditioningMap, metric: str = "kappa", *, ax=None):

@@ -20,6 +20,7 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
+from gimwatch.errors import InputError
 from gimwatch.explain.bodies import body_energies, body_names, body_split, dof_joint_ranges
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
@@ -91,31 +92,38 @@ def _ranked(names, values) -> tuple[tuple[str, float], ...]:
     return tuple(sorted(pairs, key=lambda pair: -pair[1]))
 
 
-def gim_modes(robot: Robot, q: npt.ArrayLike | None = None) -> GimModes:
+def gim_modes(robot: Robot, q: npt.ArrayLike | None = None, *, metric: str = "kappa") -> GimModes:
     """Explain κ(M(q)) by the modes of λmin and λmax (dense path; Pinocchio's Data is built).
 
     Args:
         robot: The robot.
         q: Configuration, length nq (default: neutral).
+        metric: ``kappa`` (modes of M) or ``kappa_equilibrated``: modes of S = D^-1/2 M D^-1/2,
+            eigenvalue μ of S; joints ranked by u_i² of S's unit eigenvector u (the same in any
+            units), bodies by the energy of the motion v = D^-1/2 u (vᵀ M v = μ).
     """
+    if metric not in ("kappa", "kappa_equilibrated"):
+        raise InputError("metric", "kappa or kappa_equilibrated", metric)
     model = robot.model
     q = pin.neutral(model) if q is None else as_configuration(robot, q)
     data = robot.new_data()
     M = check_robot_gim(robot, np.array(pin.crba(model, data, q)))
-    w, vectors = np.linalg.eigh(M)
+    scale = np.ones(M.shape[0]) if metric == "kappa" else 1.0 / np.sqrt(np.diag(M))
+    w, vectors = np.linalg.eigh(M * np.outer(scale, scale))
     split = body_split(robot, q, data=data)
     joints = dof_joint_ranges(robot)
     bodies = body_names(robot)
     modes = []
     for index in (0, w.size - 1):
-        v = vectors[:, index]
-        participation = [float(np.sum(v[start : start + nv] ** 2)) for _, start, nv in joints]
+        u = vectors[:, index]
+        v = scale * u  # the motion, in the robot's coordinates
+        participation = [float(np.sum(u[start : start + nv] ** 2)) for _, start, nv in joints]
         energy = body_energies(split, v)
         armature = float(v @ (split.armature * v))
         modes.append(
             Mode(
                 eigenvalue=float(w[index]),
-                vector=tuple(float(x) for x in v),
+                vector=tuple(float(x) for x in u),
                 joints=_ranked([name for name, _, _ in joints], participation),
                 bodies=_ranked(bodies, energy / energy.sum()),
                 armature_share=armature / float(w[index]),

@@ -40,6 +40,7 @@ from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = [
     "CLUSTER_RTOL",
+    "METRICS",
     "KappaSensitivities",
     "Sensitivity",
     "kappa_sensitivities",
@@ -47,6 +48,8 @@ __all__ = [
     "spatial_inertia_derivatives",
 ]
 
+#: The metrics whose sensitivities are computed exactly.
+METRICS = ("kappa", "kappa_equilibrated")
 #: Eigenvalues closer than this (relative) to λmin or λmax are treated as one cluster.
 CLUSTER_RTOL = 1e-8
 _INERTIA_ENTRIES: tuple[tuple[str, int, int], ...] = (
@@ -176,6 +179,8 @@ class KappaSensitivities:
         clustered_min: Multiplicity of the λmin cluster (1: simple, derivatives exact).
         clustered_max: Multiplicity of the λmax cluster.
         sensitivities: One record per parameter, ranked.
+        metric: ``kappa`` (of M) or ``kappa_equilibrated`` (of S = D^-1/2 M D^-1/2: then
+            ``kappa``, ``lambda_min``, ``lambda_max`` and ∂κ/∂p are κ_S's).
     """
 
     robot: str
@@ -186,6 +191,7 @@ class KappaSensitivities:
     clustered_min: int
     clustered_max: int
     sensitivities: tuple[Sensitivity, ...]
+    metric: str = "kappa"
 
     @property
     def clustered(self) -> bool:
@@ -212,6 +218,7 @@ def kappa_sensitivities(
     q: npt.ArrayLike | None = None,
     *,
     cluster_rtol: float = CLUSTER_RTOL,
+    metric: str = "kappa",
 ) -> KappaSensitivities:
     """∂κ/∂p and ∂ log κ/∂ log p for every parameter of `parameter_table` at ``q``.
 
@@ -219,19 +226,27 @@ def kappa_sensitivities(
         robot: The robot (dense path: Pinocchio's Data is built).
         q: Configuration, length nq (default: neutral).
         cluster_rtol: Relative gap under which eigenvalues are one cluster.
+        metric: ``kappa`` (κ of M) or ``kappa_equilibrated`` (κ_S, κ of S = D^-1/2 M D^-1/2;
+            then ``kappa``, ``lambda_min`` and ``lambda_max`` of the result are S's).
     """
     if not 0 <= cluster_rtol < 1:
         raise InputError("cluster_rtol", "in [0, 1)", cluster_rtol)
+    if metric not in METRICS:
+        raise InputError("metric", f"one of {', '.join(METRICS)}", metric)
     model = robot.model
     q = pin.neutral(model) if q is None else as_configuration(robot, q)
     data = robot.new_data()
     M = check_robot_gim(robot, np.array(pin.crba(model, data, q)))
-    w, vectors = np.linalg.eigh(M)
-    low, high = _clusters(w, cluster_rtol)
-    V = np.hstack([vectors[:, :low], vectors[:, w.size - high :]])
-    projected = _projected_derivatives(model, body_split(robot, q, data=data), V)
-    d_min = np.linalg.eigvalsh(projected[:, :low, :low])[:, 0]
-    d_max = np.linalg.eigvalsh(projected[:, low:, low:])[:, -1]
+    split = body_split(robot, q, data=data)
+    if metric == "kappa":
+        w, vectors = np.linalg.eigh(M)
+        low, high = _clusters(w, cluster_rtol)
+        V = np.hstack([vectors[:, :low], vectors[:, w.size - high :]])
+        projected = _projected_derivatives(model, split, V)
+        d_min = np.linalg.eigvalsh(projected[:, :low, :low])[:, 0]
+        d_max = np.linalg.eigvalsh(projected[:, low:, low:])[:, -1]
+    else:
+        w, low, high, d_min, d_max = _equilibrated_derivatives(model, split, M, cluster_rtol)
     kappa = extreme_ratio(w)
     dkappa = (d_max - kappa * d_min) / w[0]
     records = []
@@ -248,4 +263,26 @@ def kappa_sensitivities(
         clustered_min=low,
         clustered_max=high,
         sensitivities=tuple(records),
+        metric=metric,
     )
+
+
+def _equilibrated_derivatives(model, split: BodySplit, M: np.ndarray, cluster_rtol: float):
+    """Spectrum of S = D^-1/2 M D^-1/2 and ∂⁺μmin, ∂⁺μmax of S for every parameter.
+
+    For an eigenvector u of S (eigenvalue μ) and v = D^-1/2 u,
+    ``uᵀ ∂S u = vᵀ ∂M v − μ Σ_i v_i² ∂M_ii`` (∂D = diag ∂M and S u = μ u); over a cluster the
+    same holds blockwise, ``Vᵀ ∂M V − μ Vᵀ diag(∂M) V``.
+    """
+    r = 1.0 / np.sqrt(np.diag(M))
+    w, vectors = np.linalg.eigh(M * np.outer(r, r))
+    low, high = _clusters(w, cluster_rtol)
+    V = r[:, None] * np.hstack([vectors[:, :low], vectors[:, w.size - high :]])
+    k, n = V.shape[1], M.shape[0]
+    projected = _projected_derivatives(model, split, np.hstack([V, np.eye(n)]))
+    diagonal = np.diagonal(projected[:, k:, k:], axis1=1, axis2=2)  # ∂M_ii, (P, n)
+    scaled = np.einsum("pi,ia,ib->pab", diagonal, V, V)
+    block = projected[:, :k, :k]
+    d_min = np.linalg.eigvalsh(block[:, :low, :low] - w[0] * scaled[:, :low, :low])[:, 0]
+    d_max = np.linalg.eigvalsh(block[:, low:, low:] - w[-1] * scaled[:, low:, low:])[:, -1]
+    return w, low, high, d_min, d_max

@@ -29,7 +29,7 @@ from gimwatch.model.robots import (
     random_configurations,
 )
 
-__all__ = ["LINEAR_NV_LIMIT", "PATHS", "Analysis", "analyze", "choose_path"]
+__all__ = ["LINEAR_NV_LIMIT", "PATHS", "Analysis", "analyze", "choose_path", "velocity_units"]
 
 #: ``backend`` values: ``auto`` lets `choose_path` decide.
 PATHS = ("auto", "crba", "denoc")
@@ -48,6 +48,8 @@ class Analysis:
         placeholder_limits: Joints whose placeholder limits (|limit| >= 1e3 or none) random
             configurations replaced by ±π rad / ±1 m; empty when none were drawn.
         floating: Whether the base was a free-flyer (as asked, or the robot's default).
+        units: How many velocity coordinates are lengths (m) and how many angles (rad); when
+            both are present, κ and δ depend on the unit of length and κ_S does not.
     """
 
     results: tuple[GimAnalysis, ...]
@@ -55,6 +57,28 @@ class Analysis:
     chosen: bool
     placeholder_limits: tuple[str, ...] = ()
     floating: bool = False
+    units: tuple[int, int] = (0, 0)
+
+    @property
+    def mixed_units(self) -> bool:
+        """Whether lengths and angles mix among the coordinates (κ, δ then unit-dependent)."""
+        return min(self.units) > 0
+
+
+def velocity_units(model) -> tuple[int, int]:
+    """(coordinates in m, coordinates in rad) of a Pinocchio model's velocity vector."""
+    lengths = angles = 0
+    for joint in model.joints[1:]:
+        kind = joint.shortname()
+        if "FreeFlyer" in kind:
+            lengths, angles = lengths + 3, angles + 3
+        elif "Planar" in kind:
+            lengths, angles = lengths + 2, angles + 1
+        elif "Translation" in kind or "Prismatic" in kind or kind.startswith("JointModelP"):
+            lengths += joint.nv
+        else:  # revolute, continuous, spherical: rad
+            angles += joint.nv
+    return lengths, angles
 
 
 def choose_path(spec: str, *, floating: bool = False, backend: str = "auto") -> str:
@@ -92,8 +116,12 @@ def _robot_configurations(robot, q, random, seed, key, spec) -> list:
     return _configurations(q, random, seed, robot.nq, neutral, draw, robot, key=key, spec=spec)
 
 
-def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> list[GimAnalysis]:
-    """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model."""
+def _linear(spec, q, random, seed, metrics, floating, key, body, armature):
+    """The O(n) DeNOC path: generated chains never build a URDF or a Pinocchio model.
+
+    Returns:
+        The analyses, and (coordinates in m, coordinates in rad).
+    """
     from gimwatch.denoc import DenocModel
     from gimwatch.metrics.linear_analysis import (
         LINEAR_METRICS,
@@ -109,6 +137,8 @@ def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> li
         if chain.n > LINEAR_NV_LIMIT:
             raise InputError("the N of chain:N", f"at most {LINEAR_NV_LIMIT}", chain.n)
         model, name = DenocModel.from_chain(chain), chain.name
+        slides = sum(kind == "prismatic" for kind in chain.joint_types)
+        units = (slides, chain.n - slides)
         qs = _configurations(
             q,
             random,
@@ -128,9 +158,9 @@ def _linear(spec, q, random, seed, metrics, floating, key, body, armature) -> li
         model = DenocModel.from_urdf(
             robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
         )
-        name = robot.name
+        name, units = robot.name, velocity_units(robot.model)
         qs = _robot_configurations(robot, q, random, seed, key, spec)
-    return [analyze_linear(model, x, name=name, metrics=metrics, seed=seed) for x in qs]
+    return [analyze_linear(model, x, name=name, metrics=metrics, seed=seed) for x in qs], units
 
 
 def analyze(
@@ -171,7 +201,7 @@ def analyze(
         raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
     placeholders: tuple[str, ...] = ()
     if path == "denoc":
-        results = _linear(spec, q, random, seed, metrics, floating, key, body, armature)
+        results, units = _linear(spec, q, random, seed, metrics, floating, key, body, armature)
     else:
         robot = load_robot(
             spec, floating=floating, max_nv=DATA_NV_LIMIT, body=body, armature=armature
@@ -182,10 +212,12 @@ def analyze(
         if random is not None:
             placeholders = placeholder_limit_joints(robot)
         floating = robot.free_base  # an MJCF file may float its robot itself
+        units = velocity_units(robot.model)
     return Analysis(
         results=tuple(results),
         path=path,
         chosen=backend == "auto",
         placeholder_limits=placeholders,
         floating=floating,
+        units=units,
     )

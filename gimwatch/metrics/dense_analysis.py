@@ -37,6 +37,8 @@ class GimAnalysis:
         nv: Size of the GIM.
         q: The configuration (length nq).
         kappa: κ₂ = λmax/λmin (None when not asked for).
+        kappa_equilibrated: κ_S = κ₂(D^-1/2 M D^-1/2), D = diag M (None when not asked for):
+            the coupling part of κ (κ ≤ δ·κ_S), the same in any units of the coordinates.
         diagonal_ratio: δ = max M_ii / min M_ii.
         pivot_ratio_forward: max/min LDLᵀ pivot (elimination from the root).
         pivot_ratio_backward: max/min UDUᵀ pivot (elimination from the tips).
@@ -62,6 +64,7 @@ class GimAnalysis:
     max_diagonal_dof: str
     min_diagonal_dof: str
     method: str = "crba"
+    kappa_equilibrated: float | None = None
 
     def to_dict(self) -> dict:
         """A JSON-ready dict (lists for the vectors)."""
@@ -102,7 +105,13 @@ def check_robot_gim(robot: Robot, M: np.ndarray) -> np.ndarray:
 
 #: The scalar metrics of a [`GimAnalysis`][gimwatch.metrics.dense_analysis.GimAnalysis], in its
 #: field order (registry names).
-ANALYSIS_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_forward", "pivot_ratio_backward")
+ANALYSIS_METRICS = (
+    "kappa",
+    "diagonal_ratio",
+    "pivot_ratio_forward",
+    "pivot_ratio_backward",
+    "kappa_equilibrated",
+)
 
 
 def analysis_record(
@@ -144,7 +153,7 @@ def analysis_record(
 
 
 def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAnalysis:
-    """Compute κ, δ, both pivot ratios and the spectrum of M(q) (dense M, Pinocchio's CRBA)."""
+    """Compute κ, δ, both pivot ratios, κ_S and the spectrum of M(q) (dense M, Pinocchio's CRBA)."""
     q = as_configuration(robot, q)
     M = check_robot_gim(robot, gim(robot, q, data=data))
     state = GimState(robot, data, q, full=True, matrix=M)

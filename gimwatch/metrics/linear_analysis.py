@@ -3,7 +3,8 @@
 Pinocchio's Data for an n-joint model needs memory growing as n³ (about 1.8 GB at n = 300,
 8 GB at 500), and the dense GIM n². Above `DATA_NV_LIMIT` joints
 (or on request) gimwatch analyses fixed-base chains and trees with the compiled DeNOC
-recursions instead: diag M and δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each);
+recursions instead: diag M and δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each), κ_S
+from Lanczos on D^-1/2 M D^-1/2 x and its inverse (the same products, scaled by the O(n) diagonal);
 the backward (UDUᵀ) pivots from the articulated-body factor. The forward (LDLᵀ) pivots and
 the full spectrum need M itself and are not computed on this path.
 """
@@ -25,7 +26,7 @@ from gimwatch.suggest import did_you_mean
 __all__ = ["LINEAR_METRICS", "analyze_linear", "chain_configurations"]
 
 #: What the O(n) path can compute.
-LINEAR_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_backward")
+LINEAR_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_backward", "kappa_equilibrated")
 
 
 def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np.ndarray:

@@ -12,6 +12,8 @@ state computes the expensive quantities lazily, at most once, and only when a me
 * ``eigenvalues`` (ascending) and ``eigenvectors`` — a symmetric eigen-solve of M, O(n³);
 * ``extremes`` (λmin, λmax) — from the eigen-solve when M is formed, else by Lanczos on the
   O(n) products M·x and M⁻¹·x of DeNOC's linear-time state (no M);
+* ``equilibrated_extremes`` — (λmin, λmax) of S = D^-1/2 M D^-1/2 (κ_S), dense from M or by
+  Lanczos on S·x and S⁻¹·x from the linear state's O(n) products and diagonal;
 * ``ldlt_pivots`` / ``udut_pivots`` — from the Cholesky factor of M, or (UDUᵀ) from the O(n)
   articulated-body factor of the linear-time state.
 
@@ -30,7 +32,7 @@ from typing import ClassVar
 import numpy as np
 
 from gimwatch.errors import ConditioningError
-from gimwatch.metrics import conditioning
+from gimwatch.metrics import conditioning, equilibrated
 from gimwatch.model.inertia import gim, gim_diagonal
 
 __all__ = ["METRICS", "GimState", "Metric", "evaluate", "register"]
@@ -70,7 +72,7 @@ class GimState:
         self.robot, self.data, self.q, self.full = robot, data, q, full
         self.dynamics, self.lean, self.linear, self.lanczos = dynamics, lean, linear, lanczos
         self._M = self._diag = self._eig = self._vectors = self._extremes = None
-        self._ldlt = self._udut = self._raw = None
+        self._ldlt = self._udut = self._raw = self._equilibrated = None
         self.to_public = to_public
         if matrix is not None:
             self._M = conditioning.check_gim(matrix)
@@ -153,6 +155,21 @@ class GimState:
         return self._extremes
 
     @property
+    def equilibrated_extremes(self) -> tuple[float, float]:
+        """(λmin, λmax) of S = D^-1/2 M D^-1/2: eigen-solve of S, or Lanczos at O(n)."""
+        if self._equilibrated is None:
+            if self.linear is not None:
+                from gimwatch.denoc import extreme_eigenvalues
+
+                seed, rtol = self.lanczos
+                scaled = equilibrated.ScaledState(self.linear, self.linear.diagonal())
+                found = extreme_eigenvalues(scaled, seed=seed, rtol=rtol)
+                self._equilibrated = (found.lambda_min, found.lambda_max)
+            else:
+                self._equilibrated = equilibrated.equilibrated_extremes(self.M)
+        return self._equilibrated
+
+    @property
     def ldlt_pivots(self) -> np.ndarray:
         """Pivots of M = L D Lᵀ (elimination from the root), from M's Cholesky factor."""
         if self._ldlt is None:
@@ -194,6 +211,32 @@ class Kappa(Metric):
 
     def __call__(self, state):
         return conditioning.extreme_ratio(state.extremes)
+
+
+class KappaEquilibrated(Metric):
+    """κ_S = κ₂(D^-1/2 M D^-1/2), D = diag M: the digits a Cholesky solve loses, in any units."""
+
+    name = "kappa_equilibrated"
+
+    def __call__(self, state):
+        return conditioning.extreme_ratio(state.equilibrated_extremes)
+
+
+class KappaEquilibratedTracked(Metric):
+    """κ_S tracked at O(n) per sample: the κ tracker on D^-1/2 M D^-1/2 (no M formed)."""
+
+    name = "kappa_equilibrated_tracked"
+    full = False
+
+    def __init__(self) -> None:
+        self.tracker = None
+
+    def __call__(self, state):
+        if self.tracker is None:
+            self.tracker = equilibrated.equilibrated_tracker(
+                state.robot, state.dynamics, state.data, state.lean
+            )
+        return self.tracker.sample(state.q).kappa
 
 
 class KappaLanczos(Metric):
@@ -399,6 +442,8 @@ METRICS: dict[str, type[Metric]] = {
     cls.name: cls
     for cls in (
         Kappa,
+        KappaEquilibrated,
+        KappaEquilibratedTracked,
         KappaLanczos,
         KappaTracked,
         DiagonalRatio,

@@ -60,6 +60,8 @@ class RobotSurvey:
         trajectories: Along-trajectory statistics (None without trajectories).
         placeholder_limits: Joints whose placeholder limits (|limit| >= 1e3 or none) the
             random samples replaced by ±π rad / ±1 m.
+        pearson_log_delta_kappa_equilibrated: Pearson correlation of log δ with log κ_S
+            (κ_S = κ of D^-1/2 M D^-1/2, the coupling part of κ; NaN if either is constant).
     """
 
     name: str
@@ -81,6 +83,7 @@ class RobotSurvey:
     lambda_min_on_min_diagonal: float
     trajectories: TrajectoryStatistics | None = None
     placeholder_limits: tuple[str, ...] = ()
+    pearson_log_delta_kappa_equilibrated: float = float("nan")
 
     @property
     def samples(self) -> int:

@@ -91,6 +91,7 @@ def survey_record(result: SurveyResult, *, wall_time_s: float | None = None) -> 
                 "quantiles": r.quantiles,
                 "pearson_log_delta_log_kappa": r.pearson_log,
                 "spearman_delta_kappa": r.spearman,
+                "pearson_log_delta_log_kappa_equilibrated": r.pearson_log_delta_kappa_equilibrated,
                 "alpha_delta_rel_error_median": r.alpha_delta_rel_error_median,
                 "alpha_delta_rel_error_max": r.alpha_delta_rel_error_max,
                 "extreme_dofs": {

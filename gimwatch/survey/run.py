@@ -69,7 +69,13 @@ __all__ = [
 #: Quantile levels reported for κ, δ and the pivot ratios.
 QUANTILES = {"min": 0.0, "p05": 0.05, "median": 0.5, "p95": 0.95, "max": 1.0}
 #: The registry metrics among the per-sample metrics (the registry's names are the column names).
-SURVEY_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_forward", "pivot_ratio_backward")
+SURVEY_METRICS = (
+    "kappa",
+    "diagonal_ratio",
+    "pivot_ratio_forward",
+    "pivot_ratio_backward",
+    "kappa_equilibrated",
+)
 #: Per-sample metrics, in the order of the CSV columns.
 METRICS = (*SURVEY_METRICS, "lambda_min", "lambda_max")
 #: Per-sample coordinate indices (into ``Robot.dof_names``).
@@ -162,6 +168,9 @@ def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> Robot
     # t0 is the neutral configuration; without it (its M was refused) there is no α
     quality = estimator_quality(kappa, delta) if index[0] == 0 else None
     pearson, spearman = correlations(delta, kappa)
+    # δ and κ_S split κ (κ ≤ δ·κ_S) into the diagonal's spread and the coupling: whether they
+    # move together is a property of the robot, not of δ
+    pearson_s, _ = correlations(delta, metrics["kappa_equilibrated"])
     nan = float("nan")
     quantiles = {
         key: {name: float(np.quantile(metrics[key], level)) for name, level in QUANTILES.items()}
@@ -195,6 +204,7 @@ def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> Robot
         quantiles=quantiles,
         pearson_log=pearson,
         spearman=spearman,
+        pearson_log_delta_kappa_equilibrated=pearson_s,
         alpha_delta_rel_error_median=nan if quality is None else quality.median_relative_error,
         alpha_delta_rel_error_max=nan if quality is None else quality.max_relative_error,
         worst=worst,

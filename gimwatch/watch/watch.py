@@ -58,7 +58,9 @@ __all__ = [
 #: Watched when a constructor is given no metric names: κ (Eq. 6) and δ (Sec. 4).
 DEFAULT_METRICS = ("kappa", "diagonal_ratio")
 #: Metrics that run the robot's RNEA/ABA at q: they need a robot and a configuration, not M.
-OPERATOR_METRICS = frozenset({"kappa_lanczos", "kappa_tracked", "stability_margin"})
+OPERATOR_METRICS = frozenset(
+    {"kappa_lanczos", "kappa_tracked", "kappa_equilibrated_tracked", "stability_margin"}
+)
 #: Metrics of the compiled sample path: one scaled eigen-solve, or the diagonal alone.
 FAST_METRICS = frozenset({"kappa", "eigenvalues", "diagonal_ratio", "diagonal"})
 
