@@ -40,9 +40,9 @@ CASES = {
     "unknown metric": (
         lambda: Watch(UR5, ("kappa", "condition")),
         "a watched metric must be one of ['diagonal', 'diagonal_ratio', 'eigenvalues', "
-        "'kappa', 'kappa_lanczos', 'kappa_tracked', 'pivot_ratio_backward', "
-        "'pivot_ratio_forward', 'rcond', 'scaled_diagonal_ratio', 'stability_margin'], got "
-        "'condition'",
+        "'kappa', 'kappa_equilibrated', 'kappa_equilibrated_tracked', 'kappa_lanczos', "
+        "'kappa_tracked', 'pivot_ratio_backward', 'pivot_ratio_forward', 'rcond', "
+        "'scaled_diagonal_ratio', 'stability_margin'], got 'condition'",
     ),
     "alarm on an unwatched metric": (
         lambda: Watch(UR5, ("diagonal_ratio", "diagonal"), alarm_metric="kappa"),
