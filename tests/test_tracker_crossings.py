@@ -28,8 +28,8 @@ from gimwatch.model.robots import load_robot
 #: 5e-10, a margin of 2.5 for the reference's round-off (measured errors up to 8.7e-11 on
 #: these trees, κ up to 4e8, crossings included).
 BOUND = 5e-10
-#: Each end stops when its Kato–Temple estimate is at most rtol: κ's estimate is their sum.
-ESTIMATE_BOUND = 2 * 1e-10
+#: Each end is certified within rtol (Sylvester): κ's bound is (1 + rtol)/(1 − rtol) − 1.
+ESTIMATE_BOUND = 2 * 1e-10 / (1 - 1e-10)
 
 
 def y_tree_urdf(links_per_branch: int, mass_kg: float = 2.2, length_m: float = 1.0) -> str:

@@ -53,7 +53,7 @@ import scipy.linalg
 
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.metrics.conditioning import extreme_ratio
-from gimwatch.metrics.tracker.denoc import DenocEnds
+from gimwatch.metrics.tracker.denoc import CERTIFY, STOP, DenocEnds
 from gimwatch.metrics.tracker.krylov import Workspace, leading_python
 
 __all__ = ["KappaTracker", "TrackedKappa", "track_kappa"]
@@ -74,9 +74,16 @@ class TrackedKappa:
         products_min: Of which solves (the λmin end).
         fallback: ``""`` (warm start sufficed), ``"start"`` (first sample, cold), ``"cold"``
             (warm start failed, recomputed from a cold start) or ``"dense"``.
-        error_estimate: Estimated relative error of κ (sum of both ends' Kato–Temple bounds).
-        factors: O(n) articulated-body factorizations this sample took (shift-invert: one,
-            more when λmin fell below the first shift).
+        error_estimate: Bound on the relative error of κ from the certificates' brackets: the
+            true κ lies in [κ, κ·(1 + error_estimate)] (λmax in [λ, λ(1 + b)] and λmin in
+            [λ(1 − b), λ], b = rtol each after a passed certificate, the bisection's bracket
+            after a recovery); ``n·eps·κ`` after a dense solve (its round-off); ``inf`` when the
+            sample is not certified.
+        factors: O(n) factorizations this sample took (shift-invert, the two certificates,
+            more after a recovery).
+        certified: Whether both ends passed their Sylvester certificate (or came from a dense
+            solve). False only on a provider that cannot count eigenvalues past a shift and
+            without a ``dense`` fallback; the value is then unverified.
     """
 
     kappa: float
@@ -88,6 +95,7 @@ class TrackedKappa:
     fallback: str
     error_estimate: float
     factors: int = 1
+    certified: bool = True
 
 
 class _End:
@@ -169,20 +177,25 @@ class KappaTracker:
         try:
             if self._denoc is not None:
                 ends = self._denoc.sample(q, self)
-                factors = ends.pop()
+                factors, certified = ends.pop(), True
             else:
                 self.products.configure(q)
                 ends = [self._end(end) for end in self._ends]
-                factors = 0
+                factors, certified = self._certify(q, ends[0][0], ends[1][0])
+                if not certified:
+                    matrix = self._matrix(q)
+                    if matrix is not None:
+                        return self._dense_sample(matrix)
         except ConditioningError:
             if self.dense is None:
                 raise
-            return self._dense_sample(q)
-        (top, n_max, fb_max, e_max), (low, n_min, fb_min, e_min) = ends
+            return self._dense_sample(self.dense(q))
+        (top, n_max, fb_max, b_max), (low, n_min, fb_min, b_min) = ends
         if not (top > 0 and low > 0):
             raise ConditioningError(
                 f"M(q) must be positive definite, got λmax = {top:.6g}, λmin = {low:.6g}"
             )
+        bound = (b_max + b_min) / (1.0 - b_min) if certified else np.inf  # (1+a)/(1-b) - 1
         return TrackedKappa(
             kappa=float(top / low),
             lambda_max=float(top),
@@ -191,9 +204,36 @@ class KappaTracker:
             products_max=n_max,
             products_min=n_min,
             fallback=max(fb_max, fb_min, key=_ORDER.index),
-            error_estimate=float(e_max + e_min),
+            error_estimate=float(bound),
             factors=factors,
+            certified=bool(certified),
         )
+
+    def _certify(self, q: np.ndarray, top: float, low: float) -> tuple[int, bool | None]:
+        """(factorizations, certified) of a Python provider's ends; certified None: cannot.
+
+        λmax passes when M − λmax(1 + CERTIFY·rtol)·1 has no positive eigenvalue, λmin when
+        M − λmin(1 − CERTIFY·rtol)·1 has no negative one (Sylvester's law of inertia): from the
+        provider's ``shifted_inertia(shift)`` ((positive, negative) pivots of its factor of
+        M − shift·1, O(n)-ish on Pinocchio's sparse LDLᵀ), else from Cholesky of the dense M.
+        """
+        margin = CERTIFY * self.rtol
+        above, below = top * (1.0 + margin), low * (1.0 - margin)
+        inertia = getattr(self.products, "shifted_inertia", None)
+        if inertia is not None:
+            return 2, inertia(above)[1] == self.nv and inertia(below)[0] == self.nv
+        if self.dense is None:
+            return 0, None
+        M = self.dense(q)
+        shifted = (above * np.eye(self.nv) - M, M - below * np.eye(self.nv))
+        return 2, all(scipy.linalg.lapack.dpotrf(A, lower=1)[1] == 0 for A in shifted)
+
+    def _matrix(self, q: np.ndarray) -> np.ndarray | None:
+        """The dense M(q) for a recovery: ``dense``'s, else the provider's, else None."""
+        if self.dense is not None:
+            return self.dense(q)
+        gim_matrix = getattr(self.products, "gim_matrix", None)
+        return None if gim_matrix is None else gim_matrix()
 
     def _leading(self, end: _End, starts: list[np.ndarray], budget: int):
         block = np.empty((end.keep, self.nv))
@@ -202,7 +242,7 @@ class KappaTracker:
             np.array(starts),
             end.workspace,
             block,
-            rtol=self.rtol,
+            rtol=self.rtol * STOP,
             budget=budget,
             keep=end.keep,
         )
@@ -239,10 +279,10 @@ class KappaTracker:
         end.previous = None if end.block is None else end.block[-1].copy()
         end.theta, end.block = result[0], result[1]
         value = result[0] if end is self._ends[0] else 1.0 / result[0]
-        return value, count, fallback, result[2]
+        return value, count, fallback, CERTIFY * self.rtol
 
-    def _dense_sample(self, q: np.ndarray) -> TrackedKappa:
-        values, vectors = scipy.linalg.eigh(self.dense(q), check_finite=False)
+    def _dense_sample(self, matrix: np.ndarray) -> TrackedKappa:
+        values, vectors = scipy.linalg.eigh(matrix, check_finite=False)
         if values[0] <= 0:
             raise ConditioningError(f"M(q) must be positive definite, got λmin = {values[0]:.6g}")
         top, low = vectors[:, -2:].T, vectors[:, :2][:, ::-1].T
@@ -250,15 +290,16 @@ class KappaTracker:
         self._ends[1].theta, self._ends[1].block = float(1.0 / values[0]), low
         if self._denoc is not None:
             self._denoc.restart(values[-1], values[0], top, low)
+        kappa = extreme_ratio(values)
         return TrackedKappa(
-            kappa=extreme_ratio(values),
+            kappa=kappa,
             lambda_max=float(values[-1]),
             lambda_min=float(values[0]),
             products=0,
             products_max=0,
             products_min=0,
             fallback="dense",
-            error_estimate=0.0,
+            error_estimate=float(self.nv * np.finfo(float).eps * kappa),
             factors=0,
         )
 
