@@ -5,7 +5,7 @@ straightens one branch while curling the other, the lowest mode moves from one b
 other. The warm Ritz block (localised in the first branch) has no component on the new
 lowest mode, Lanczos converges to the old one, and the Sylvester check at the previous shift
 passes (the shift lies below both). Each sample's λmin is now certified by a factorization
-of M − λ(1 − 100·rtol)·1 (all pivots positive: no eigenvalue below), and recovered by
+of M − λ(1 − rtol)·1 (all pivots positive: no eigenvalue below), and recovered by
 Sylvester bisection when it fails.
 
 Reference at every sample, independent of the tracker and of DeNOC: λmax(M)·λmax(M⁻¹) from

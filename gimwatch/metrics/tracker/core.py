@@ -5,10 +5,8 @@ costs O(n³). Along a trajectory M(q) changes little from one sample to the next
 its extreme eigenpairs: the previous sample's are a near-perfect start.
 [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] tracks both ends with O(n) operators and
 thick-restart Lanczos ([`gimwatch.metrics.tracker.krylov`][gimwatch.metrics.tracker.krylov]), each
-end started from the previous sample's Ritz block plus one fresh seeded random probe (it has a
-component on every eigenvector, so a new leading eigenvector that appeared orthogonally to the block
-keeps the residual large until the basis has found it), converged on the Kato–Temple bound ‖r‖²/(θ ·
-gap) ≤ rtol of each end (κ to about 2·rtol; default rtol = 1e-10).
+end started from the previous sample's Ritz block plus one fresh seeded random probe, stopped on
+the Kato–Temple estimate ‖r‖²/(θ · gap) ≤ rtol/4 of each end (`STOP`), then **certified**.
 
 * **λmax**: Lanczos on M·x (inverse dynamics from rest).
 * **λmin**, on DeNOC's compiled model: shift-invert. The articulated-body factor of
@@ -20,23 +18,37 @@ gap) ≤ rtol of each end (κ to about 2·rtol; default rtol = 1e-10).
   where λmin and λ₂ of a long chain differ by 0.07 % — and λmin = σ + 1/θ keeps its relative
   accuracy (κ ~ 1e11 at n = 400). s follows the observed motion of λmin (10× the last
   relative change, at least 1e-8).
-* **λmin is certified at every sample** on DeNOC's model: M − λ(1 − 100·rtol)·1 must factor
-  with positive pivots, i.e. no eigenvalue lies below the reported one (Ritz values lie above
-  λmin, so it is then within 100·rtol of λmin). A warm Ritz block localised in one branch of
-  a tree cannot see a lower mode that appears in another branch (the two smallest eigenvalues
-  cross), and Lanczos converges to the old mode with a small error estimate; the certificate
-  catches it, and λmin is recovered by Sylvester bisection on the shift, then Lanczos just
-  below it (``fallback = "cold"``). One O(n) factorization more per sample (10–15 % of a
-  sample's time at n = 100–1000).
 * **λmin**, on other providers (Pinocchio's ABA, test operators): Lanczos on M⁻¹·y with a
-  block of 8 Ritz vectors (the smallest eigenvalues of a long chain cluster; Rayleigh–Ritz
-  on the tracked cluster resolves crossings inside it).
+  block of 8 Ritz vectors.
+
+**Both ends are certified at every sample** by Sylvester's law of inertia, at the tolerance:
+M − λmax(1 + rtol)·1 must have only negative pivots (no eigenvalue above) and
+M − λmin(1 − rtol)·1 only positive ones (no eigenvalue below). Ritz values lie inside the
+spectrum (λmax ≥ its Ritz value, λmin ≤ σ + 1/θ), so a passed certificate brackets each end to
+rtol whatever Lanczos converged to, and the true κ lies in [κ, κ·(1 + e)], e = 2·rtol/(1 − rtol)
+(``error_estimate``). The certificate is what catches eigenvalue crossings: a warm Ritz block
+holding the old extreme eigenvector (an exact eigenpair when the crossing mode lives in a
+decoupled part of the tree — the other arm of a dual-arm robot, the other branch) converges at
+once on the wrong eigenvalue with a tiny residual. On DeNOC's model each certificate is one O(n)
+factorization of M − shift·1 (3 per warm sample with the shift-invert one); on
+[`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts] it is Pinocchio's
+sparse LDLᵀ of CRBA's M with the shift on the diagonal (armature included); on a provider
+without ``shifted_inertia(shift)``, Cholesky of ``dense(q)``; without either the sample is
+returned with ``certified = False`` and ``error_estimate = inf``.
+
+**A failed certificate recovers the value.** On DeNOC's model: λmax from a cold start (a probe and
+the Ritz block), and when that still does not certify, by Sylvester bisection on the shift to
+rtol (its bracket is the bound), the block then given the new eigenvector by inverse iteration
+just above λmax; λmin likewise (bisection to 1e-3, Lanczos on (M − lo·1)⁻¹, bisection to rtol if
+needed). ``fallback = "cold"`` then means recovered and certified. On the other providers a
+failed certificate is a dense solve (``"dense"``) of ``dense(q)`` or the provider's
+``gim_matrix()``.
 
 **Detected fallback.** An end's warm start has failed when it has not converged within
 ``warm_products`` products, or when its eigenvalue moved by more than ``jump`` (relative)
 since the previous sample; it is then recomputed from a cold start (a new probe and the
-best current Ritz vectors, up to ``max_products``) and, if that does not converge either,
-from the dense matrix when a ``dense`` provider was given, else a
+best current Ritz vectors, up to ``max_products``) and certified as above. A provider that
+cannot converge falls back to the dense matrix when a ``dense`` provider was given, else a
 [`ConditioningError`][gimwatch.errors.ConditioningError] is raised. The first sample is a cold
 start. Each sample reports the products and factorizations it took
 ([`TrackedKappa`][gimwatch.metrics.tracker.TrackedKappa]).
@@ -117,15 +129,19 @@ class KappaTracker:
             ``gim_solve(y)`` (M⁻¹·y) at the configured q: a
             [`gimwatch.denoc.lean.LeanModel`][gimwatch.denoc.LeanModel] (``DenocModel.lean()``:
             compiled, with shift-invert for λmin), or
-            [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts].
+            [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts]. Optional:
+            ``shifted_inertia(shift)`` ((positive, negative) pivots of an LDLᵀ of M − shift·1,
+            for the certificates) and ``gim_matrix()`` (dense M, for a recovery).
         nv: Size of M.
-        rtol: Relative tolerance on each extreme eigenvalue (the stopping rule).
+        rtol: Relative tolerance on each extreme eigenvalue, certified (Lanczos stops at
+            rtol/4, the certificate holds each end to rtol).
         warm_products: Products per end the warm start may take before it counts as failed.
         max_products: Products per end of the cold start before the dense fallback.
         jump: Relative change of an extreme eigenvalue since the previous sample beyond which
             the warm result is re-checked by a cold start.
         seed: Seed of the random probe vectors.
-        dense: ``q ↦ M(q)`` for the last fallback (None: raise instead).
+        dense: ``q ↦ M(q)`` for the last fallback and, on providers without
+            ``shifted_inertia``, the certificates (None: raise, or leave uncertified).
         blocks: Ritz vectors carried from sample to sample, (λmax end, 1/λmin end); the
             compiled DeNOC path carries 2 at the λmin end (shift-invert separates it).
     """

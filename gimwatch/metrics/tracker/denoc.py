@@ -7,8 +7,10 @@ end's Ritz block, the last λmin and its last relative change. A warm sample is 
 `gimwatch.denoc.fused`), Lanczos on M·x for λmax, the articulated factor of M − σ·1 with σ =
 λmin(previous)·(1 − s) (refactored with s × 100 while a pivot is not positive — Sylvester's law of
 inertia: then λmin ≤ σ — up to s = 1, the plain M⁻¹), and Lanczos on (M − σ·1)⁻¹ for λmin = σ + 1/θ.
-Cold starts (the first sample, and the detected failures of a warm one) run the same
-compiled pieces from Python: λmin first to 1e-7 on M⁻¹, then shift-invert to the tolerance.
+The same call certifies both ends (one factor each: M − λmax(1 + rtol)·1 with only negative
+pivots, M − λmin(1 − rtol)·1 with only positive ones). Cold starts (the first sample, and the
+detected or uncertified failures of a warm one) run the same compiled pieces from Python, and
+recover an end whose certificate fails by Sylvester bisection on the shift.
 See [`core`][gimwatch.metrics.tracker.core] for the method and its stopping rule.
 """
 
