@@ -262,3 +262,47 @@ def test_decoupled_tree_one_branch_still_one_sweeping(tmp_path, links, floating,
         products = PinocchioProducts(robot) if provider == "pinocchio" else _lean(robot, floating)
         results = _check(KappaTracker(products, robot.nv), robot.model, configurations)
         assert all(r.certified for r in results)
+
+
+class _Spectrum:
+    """M = Q diag(values) Qᵀ with a chosen spectrum, and nothing to count pivots with."""
+
+    def __init__(self, n: int) -> None:
+        self.nv = n
+        self.Q = np.linalg.qr(np.random.default_rng(0).standard_normal((n, n)))[0]
+
+    def matrix(self, values) -> np.ndarray:
+        return (self.Q * values) @ self.Q.T
+
+    def configure(self, values) -> None:
+        self.M, self.Minv = self.matrix(values), (self.Q / values) @ self.Q.T
+
+    def gim_product(self, x):
+        return self.M @ x
+
+    def gim_solve(self, y):
+        return self.Minv @ y
+
+
+@pytest.mark.parametrize("dense", [False, True], ids=["no-dense", "dense"])
+def test_a_provider_that_cannot_certify_marks_its_samples(dense):
+    """A mode orthogonal to the warm block rises above λmax without a jump: a provider without
+    ``shifted_inertia`` either certifies by Cholesky of ``dense`` (and recovers the value) or
+    marks the sample uncertified; it never reports the wrong λmax as certified."""
+    n = 40
+    op = _Spectrum(n)
+    tracker = KappaTracker(op, n, dense=op.matrix if dense else None)
+    values = np.linspace(1.0, 5.0, n)
+    values[-1], values[-2] = 10.0, 9.0
+    fallbacks = []
+    for step in range(6):
+        values[7] = 8.0 + 0.6 * step  # eigenvector Q[:, 7]: outside the tracked block; crosses
+        result = tracker.sample(values.copy())
+        fallbacks.append(result.fallback)
+        error = abs(result.kappa / (values.max() / values.min()) - 1)
+        if dense:
+            assert result.certified and error <= KAPPA_TOLERANCE, (step, result)
+        else:
+            assert not result.certified and result.error_estimate == np.inf
+    if dense:  # the crossing (step 4) was caught by the certificate and solved densely
+        assert "dense" in fallbacks
