@@ -5,8 +5,8 @@ costs O(n³). Along a trajectory M(q) changes little from one sample to the next
 its extreme eigenpairs: the previous sample's are a near-perfect start.
 [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] tracks both ends with O(n) operators and
 thick-restart Lanczos ([`gimwatch.metrics.tracker.krylov`][gimwatch.metrics.tracker.krylov]), each
-end started from the previous sample's Ritz block (plus one fresh seeded random probe on Python
-providers; on DeNOC's model the block alone, `denoc.WARM_PROBE`), stopped on
+end started from the previous sample's Ritz block plus one fresh seeded random probe (on DeNOC's
+model the λmax end starts from its block alone, `denoc.WARM_PROBE`), stopped on
 the Kato–Temple estimate ‖r‖²/(θ · gap) ≤ rtol/4 of each end (`STOP`), then **certified**.
 
 * **λmax**: Lanczos on M·x (inverse dynamics from rest).

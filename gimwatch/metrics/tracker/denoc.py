@@ -38,11 +38,12 @@ _PROBES = 16  # seeded probe vectors, used in turn
 CERTIFY = 1.0
 #: Lanczos stops at STOP·rtol (its Kato–Temple estimate), so that the certificate at rtol passes.
 STOP = 0.25
-#: Whether a warm sample adds a fresh probe to each Ritz block (1) or starts from the block alone
-#: (0). The certificates catch what the block misses (a failed one brings a probe in, in the cold
-#: start); without the probe a warm sample takes one product and one solve fewer (7–12 % of its
-#: time at n = 100, and no more cold starts on smooth or random paths).
-WARM_PROBE = 0
+#: Whether a warm sample adds a fresh probe to the (λmax, λmin) end's Ritz block (1) or starts
+#: that end from the block alone (0). λmax: the certificate catches what the block misses (a failed
+#: one brings a probe in, in the cold start), and a warm sample saves a product (5–10 % of its
+#: time at n = 100–400). λmin: the probe stays; without it the clustered low modes of a long chain
+#: send 3–5× more samples of a random path to a cold start (measured at n = 200 and 400).
+WARM_PROBE = (0, 1)
 
 
 @njit(cache=True)
@@ -113,7 +114,7 @@ def warm_sample(
             ([`DenocEnds.sample`][gimwatch.metrics.tracker.denoc.DenocEnds.sample]).
     """
     rtol, budget, jump, margin = params[0], int(params[1]), params[2], params[3]
-    probe = int(params[4])  # 1: a fresh probe joins each warm block, 0: the block alone
+    probe_max, probe_min = int(params[4]), int(params[5])  # 1: a probe joins that end's block
     size = starts_max.shape[1]
     used = int(state[3])
     starts_max[-1] = probes[used % probes.shape[0]]
@@ -123,7 +124,7 @@ def warm_sample(
     fused.kinematics(q, index, geometry, floating, rot, vec, block)
     keep = starts_max.shape[0] - 1
     top, e_top, ok_top, n_top = leading(
-        0, starts_max, keep + probe, 0.0, rtol, budget, keep, _CHECK_EVERY, V, AV, H, vectors,
+        0, starts_max, keep + probe_max, 0.0, rtol, budget, keep, _CHECK_EVERY, V, AV, H, vectors,
         starts_max, model,
     )  # fmt: skip
     stats[:] = 0.0
@@ -144,7 +145,7 @@ def warm_sample(
         return
     keep = starts_min.shape[0] - 1
     theta, e_low, ok_low, n_low = leading(
-        1, starts_min, keep + probe, sigma, rtol, budget, keep, _CHECK_EVERY, V, AV, H, vectors,
+        1, starts_min, keep + probe_min, sigma, rtol, budget, keep, _CHECK_EVERY, V, AV, H, vectors,
         starts_min, model,
     )  # fmt: skip
     low = sigma + 1.0 / theta
@@ -357,7 +358,7 @@ class DenocEnds:
             return self._start(q, tracker)
         stats, margin = self._stats, CERTIFY * tracker.rtol
         params = np.array(
-            [tracker.rtol * STOP, tracker.warm_products, tracker.jump, margin, WARM_PROBE]
+            [tracker.rtol * STOP, tracker.warm_products, tracker.jump, margin, *WARM_PROBE]
         )
         warm_sample(
             q, self._geometry, self._model, *self._starts, self._probes, self._state, params,
