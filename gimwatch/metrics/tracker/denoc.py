@@ -185,6 +185,8 @@ class DenocEnds:
         self._stats = np.zeros(16)
         self._probes = np.random.default_rng(seed + 1).standard_normal((_PROBES, n))
         self._state = np.zeros(4)  # λmax, λmin, relative change of λmin, probes used
+        self._arguments: tuple | None = None  # warm_sample's, after q
+        self._settings: tuple = ()
         self.sampled = False
 
     @classmethod
@@ -357,13 +359,15 @@ class DenocEnds:
         if not self.sampled:
             return self._start(q, tracker)
         stats, margin = self._stats, CERTIFY * tracker.rtol
-        params = np.array(
-            [tracker.rtol * STOP, tracker.warm_products, tracker.jump, margin, *WARM_PROBE]
-        )
-        warm_sample(
-            q, self._geometry, self._model, *self._starts, self._probes, self._state, params,
-            *self._work.arrays(), stats,
-        )  # fmt: skip
+        settings = (tracker.rtol * STOP, tracker.warm_products, tracker.jump, margin, *WARM_PROBE)
+        if self._arguments is None or settings != self._settings:
+            # built once: the Python side of a warm sample is a good part of its cost at n ≤ 100
+            self._settings = settings
+            self._arguments = (
+                self._geometry, self._model, *self._starts, self._probes, self._state,
+                np.array(settings), *self._work.arrays(), stats,
+            )  # fmt: skip
+        warm_sample(q, *self._arguments)
         top, _, _, n_top, low, _, _, n_low, _, factors, definite, cold = stats[:12].tolist()
         n_top, n_low, factors = int(n_top), int(n_low), int(factors)
         if not cold:
