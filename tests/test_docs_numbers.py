@@ -1190,10 +1190,11 @@ def test_tracker_prose_is_the_committed_cost_run():
     assert min(ratios) == 20 and max(ratios) == 400
     _find(page, r"to under a thirtieth of the dense cost at 400 links")
     assert ratios[400] < 1 / 30
-    match = _find(page, r"for (\d+)–(\d+) O\(n\) products and two O\(n\) factorizations")
+    match = _find(page, r"for (\d+)–(\d+) O\(n\) products and three O\(n\) factorizations")
     medians = [float(r["products_median"]) for r in rows]
     assert [int(match.group(1)), int(match.group(2))] == [min(medians), max(medians)]
-    assert all(float(r["factors_median"]) == 2 for r in rows)  # the shift, the certificate
+    # the shift and the two certificates (λmin, λmax)
+    assert all(float(r["factors_median"]) == 3 for r in rows)
 
 
 def test_bench_block_work_precision_table_is_the_committed_csv():

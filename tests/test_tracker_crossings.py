@@ -5,7 +5,7 @@ straightens one branch while curling the other, the lowest mode moves from one b
 other. The warm Ritz block (localised in the first branch) has no component on the new
 lowest mode, Lanczos converges to the old one, and the Sylvester check at the previous shift
 passes (the shift lies below both). Each sample's λmin is now certified by a factorization
-of M − λ(1 − 100·rtol)·1 (all pivots positive: no eigenvalue below), and recovered by
+of M − λ(1 − rtol)·1 (all pivots positive: no eigenvalue below), and recovered by
 Sylvester bisection when it fails.
 
 Reference at every sample, independent of the tracker and of DeNOC: λmax(M)·λmax(M⁻¹) from
@@ -28,8 +28,8 @@ from gimwatch.model.robots import load_robot
 #: 5e-10, a margin of 2.5 for the reference's round-off (measured errors up to 8.7e-11 on
 #: these trees, κ up to 4e8, crossings included).
 BOUND = 5e-10
-#: Each end stops when its Kato–Temple estimate is at most rtol: κ's estimate is their sum.
-ESTIMATE_BOUND = 2 * 1e-10
+#: Each end is certified within rtol (Sylvester): κ's bound is (1 + rtol)/(1 − rtol) − 1.
+ESTIMATE_BOUND = 2 * 1e-10 / (1 - 1e-10)
 
 
 def y_tree_urdf(links_per_branch: int, mass_kg: float = 2.2, length_m: float = 1.0) -> str:

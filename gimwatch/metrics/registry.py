@@ -277,9 +277,10 @@ class KappaTracked(Metric):
     compiled M·x and M⁻¹·y (or Pinocchio's RNEA/ABA when DeNOC cannot read the robot), warm-started
     from the previous sample's eigenvectors, with a detected cold-start fallback. ``products`` lists
     the O(n) products each sample took, ``fallbacks`` each sample's fallback (``""``, ``"cold"``,
-    ``"dense"``, ...) and ``error_estimates`` its relative error bound. A sample the O(n) solve
-    cannot certify falls back to a dense eigen-solve of M (Pinocchio's CRBA or the backend's
-    ``gim``) instead of raising.
+    ``"dense"``, ...) and ``error_estimates`` its relative error bound (both ends certified by
+    Sylvester's law of inertia: the true κ lies in [κ, κ·(1 + bound)]). A sample the O(n)
+    solve cannot converge or certify falls back to a dense eigen-solve of M (Pinocchio's CRBA or
+    the backend's ``gim``) instead of raising.
     """
 
     name = "kappa_tracked"

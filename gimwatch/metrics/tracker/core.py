@@ -5,10 +5,9 @@ costs O(n³). Along a trajectory M(q) changes little from one sample to the next
 its extreme eigenpairs: the previous sample's are a near-perfect start.
 [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] tracks both ends with O(n) operators and
 thick-restart Lanczos ([`gimwatch.metrics.tracker.krylov`][gimwatch.metrics.tracker.krylov]), each
-end started from the previous sample's Ritz block plus one fresh seeded random probe (it has a
-component on every eigenvector, so a new leading eigenvector that appeared orthogonally to the block
-keeps the residual large until the basis has found it), converged on the Kato–Temple bound ‖r‖²/(θ ·
-gap) ≤ rtol of each end (κ to about 2·rtol; default rtol = 1e-10).
+end started from the previous sample's Ritz block plus one fresh seeded random probe (on DeNOC's
+model the λmax end starts from its block alone, `denoc.WARM_PROBE`), stopped on
+the Kato–Temple estimate ‖r‖²/(θ · gap) ≤ rtol/4 of each end (`STOP`), then **certified**.
 
 * **λmax**: Lanczos on M·x (inverse dynamics from rest).
 * **λmin**, on DeNOC's compiled model: shift-invert. The articulated-body factor of
@@ -20,23 +19,37 @@ gap) ≤ rtol of each end (κ to about 2·rtol; default rtol = 1e-10).
   where λmin and λ₂ of a long chain differ by 0.07 % — and λmin = σ + 1/θ keeps its relative
   accuracy (κ ~ 1e11 at n = 400). s follows the observed motion of λmin (10× the last
   relative change, at least 1e-8).
-* **λmin is certified at every sample** on DeNOC's model: M − λ(1 − 100·rtol)·1 must factor
-  with positive pivots, i.e. no eigenvalue lies below the reported one (Ritz values lie above
-  λmin, so it is then within 100·rtol of λmin). A warm Ritz block localised in one branch of
-  a tree cannot see a lower mode that appears in another branch (the two smallest eigenvalues
-  cross), and Lanczos converges to the old mode with a small error estimate; the certificate
-  catches it, and λmin is recovered by Sylvester bisection on the shift, then Lanczos just
-  below it (``fallback = "cold"``). One O(n) factorization more per sample (10–15 % of a
-  sample's time at n = 100–1000).
 * **λmin**, on other providers (Pinocchio's ABA, test operators): Lanczos on M⁻¹·y with a
-  block of 8 Ritz vectors (the smallest eigenvalues of a long chain cluster; Rayleigh–Ritz
-  on the tracked cluster resolves crossings inside it).
+  block of 8 Ritz vectors.
+
+**Both ends are certified at every sample** by Sylvester's law of inertia, at the tolerance:
+M − λmax(1 + rtol)·1 must have only negative pivots (no eigenvalue above) and
+M − λmin(1 − rtol)·1 only positive ones (no eigenvalue below). Ritz values lie inside the
+spectrum (λmax ≥ its Ritz value, λmin ≤ σ + 1/θ), so a passed certificate brackets each end to
+rtol whatever Lanczos converged to, and the true κ lies in [κ, κ·(1 + e)], e = 2·rtol/(1 − rtol)
+(``error_estimate``). The certificate is what catches eigenvalue crossings: a warm Ritz block
+holding the old extreme eigenvector (an exact eigenpair when the crossing mode lives in a
+decoupled part of the tree — the other arm of a dual-arm robot, the other branch) converges at
+once on the wrong eigenvalue with a tiny residual. On DeNOC's model each certificate is one O(n)
+factorization of M − shift·1 (3 per warm sample with the shift-invert one); on
+[`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts] it is Pinocchio's
+sparse LDLᵀ of CRBA's M with the shift on the diagonal (armature included); on a provider
+without ``shifted_inertia(shift)``, Cholesky of ``dense(q)``; without either the sample is
+returned with ``certified = False`` and ``error_estimate = inf``.
+
+**A failed certificate recovers the value.** On DeNOC's model: λmax from a cold start (a probe and
+the Ritz block), and when that still does not certify, by Sylvester bisection on the shift to
+rtol (its bracket is the bound), the block then given the new eigenvector by inverse iteration
+just above λmax; λmin likewise (bisection to 1e-3, Lanczos on (M − lo·1)⁻¹, bisection to rtol if
+needed). ``fallback = "cold"`` then means recovered and certified. On the other providers a
+failed certificate is a dense solve (``"dense"``) of ``dense(q)`` or the provider's
+``gim_matrix()``.
 
 **Detected fallback.** An end's warm start has failed when it has not converged within
 ``warm_products`` products, or when its eigenvalue moved by more than ``jump`` (relative)
 since the previous sample; it is then recomputed from a cold start (a new probe and the
-best current Ritz vectors, up to ``max_products``) and, if that does not converge either,
-from the dense matrix when a ``dense`` provider was given, else a
+best current Ritz vectors, up to ``max_products``) and certified as above. A provider that
+cannot converge falls back to the dense matrix when a ``dense`` provider was given, else a
 [`ConditioningError`][gimwatch.errors.ConditioningError] is raised. The first sample is a cold
 start. Each sample reports the products and factorizations it took
 ([`TrackedKappa`][gimwatch.metrics.tracker.TrackedKappa]).
@@ -53,7 +66,7 @@ import scipy.linalg
 
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.metrics.conditioning import extreme_ratio
-from gimwatch.metrics.tracker.denoc import DenocEnds
+from gimwatch.metrics.tracker.denoc import CERTIFY, STOP, DenocEnds
 from gimwatch.metrics.tracker.krylov import Workspace, leading_python
 
 __all__ = ["KappaTracker", "TrackedKappa", "track_kappa"]
@@ -74,9 +87,16 @@ class TrackedKappa:
         products_min: Of which solves (the λmin end).
         fallback: ``""`` (warm start sufficed), ``"start"`` (first sample, cold), ``"cold"``
             (warm start failed, recomputed from a cold start) or ``"dense"``.
-        error_estimate: Estimated relative error of κ (sum of both ends' Kato–Temple bounds).
-        factors: O(n) articulated-body factorizations this sample took (shift-invert: one,
-            more when λmin fell below the first shift).
+        error_estimate: Bound on the relative error of κ from the certificates' brackets: the
+            true κ lies in [κ, κ·(1 + error_estimate)] (λmax in [λ, λ(1 + b)] and λmin in
+            [λ(1 − b), λ], b = rtol each after a passed certificate, the bisection's bracket
+            after a recovery); ``n·eps·κ`` after a dense solve (its round-off); ``inf`` when the
+            sample is not certified.
+        factors: O(n) factorizations this sample took (shift-invert, the two certificates,
+            more after a recovery).
+        certified: Whether both ends passed their Sylvester certificate (or came from a dense
+            solve). False only on a provider that cannot count eigenvalues past a shift and
+            without a ``dense`` fallback; the value is then unverified.
     """
 
     kappa: float
@@ -88,6 +108,7 @@ class TrackedKappa:
     fallback: str
     error_estimate: float
     factors: int = 1
+    certified: bool = True
 
 
 class _End:
@@ -109,15 +130,19 @@ class KappaTracker:
             ``gim_solve(y)`` (M⁻¹·y) at the configured q: a
             [`gimwatch.denoc.lean.LeanModel`][gimwatch.denoc.LeanModel] (``DenocModel.lean()``:
             compiled, with shift-invert for λmin), or
-            [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts].
+            [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts]. Optional:
+            ``shifted_inertia(shift)`` ((positive, negative) pivots of an LDLᵀ of M − shift·1,
+            for the certificates) and ``gim_matrix()`` (dense M, for a recovery).
         nv: Size of M.
-        rtol: Relative tolerance on each extreme eigenvalue (the stopping rule).
+        rtol: Relative tolerance on each extreme eigenvalue, certified (Lanczos stops at
+            rtol/4, the certificate holds each end to rtol).
         warm_products: Products per end the warm start may take before it counts as failed.
         max_products: Products per end of the cold start before the dense fallback.
         jump: Relative change of an extreme eigenvalue since the previous sample beyond which
             the warm result is re-checked by a cold start.
         seed: Seed of the random probe vectors.
-        dense: ``q ↦ M(q)`` for the last fallback (None: raise instead).
+        dense: ``q ↦ M(q)`` for the last fallback and, on providers without
+            ``shifted_inertia``, the certificates (None: raise, or leave uncertified).
         blocks: Ritz vectors carried from sample to sample, (λmax end, 1/λmin end); the
             compiled DeNOC path carries 2 at the λmin end (shift-invert separates it).
     """
@@ -169,20 +194,25 @@ class KappaTracker:
         try:
             if self._denoc is not None:
                 ends = self._denoc.sample(q, self)
-                factors = ends.pop()
+                factors, certified = ends.pop(), True
             else:
                 self.products.configure(q)
                 ends = [self._end(end) for end in self._ends]
-                factors = 0
+                factors, certified = self._certify(q, ends[0][0], ends[1][0])
+                if not certified:
+                    matrix = self._matrix(q)
+                    if matrix is not None:
+                        return self._dense_sample(matrix)
         except ConditioningError:
             if self.dense is None:
                 raise
-            return self._dense_sample(q)
-        (top, n_max, fb_max, e_max), (low, n_min, fb_min, e_min) = ends
+            return self._dense_sample(self.dense(q))
+        (top, n_max, fb_max, b_max), (low, n_min, fb_min, b_min) = ends
         if not (top > 0 and low > 0):
             raise ConditioningError(
                 f"M(q) must be positive definite, got λmax = {top:.6g}, λmin = {low:.6g}"
             )
+        bound = (b_max + b_min) / (1.0 - b_min) if certified else np.inf  # (1+a)/(1-b) - 1
         return TrackedKappa(
             kappa=float(top / low),
             lambda_max=float(top),
@@ -191,9 +221,36 @@ class KappaTracker:
             products_max=n_max,
             products_min=n_min,
             fallback=max(fb_max, fb_min, key=_ORDER.index),
-            error_estimate=float(e_max + e_min),
+            error_estimate=float(bound),
             factors=factors,
+            certified=bool(certified),
         )
+
+    def _certify(self, q: np.ndarray, top: float, low: float) -> tuple[int, bool | None]:
+        """(factorizations, certified) of a Python provider's ends; certified None: cannot.
+
+        λmax passes when M − λmax(1 + CERTIFY·rtol)·1 has no positive eigenvalue, λmin when
+        M − λmin(1 − CERTIFY·rtol)·1 has no negative one (Sylvester's law of inertia): from the
+        provider's ``shifted_inertia(shift)`` ((positive, negative) pivots of its factor of
+        M − shift·1, O(n)-ish on Pinocchio's sparse LDLᵀ), else from Cholesky of the dense M.
+        """
+        margin = CERTIFY * self.rtol
+        above, below = top * (1.0 + margin), low * (1.0 - margin)
+        inertia = getattr(self.products, "shifted_inertia", None)
+        if inertia is not None:
+            return 2, inertia(above)[1] == self.nv and inertia(below)[0] == self.nv
+        if self.dense is None:
+            return 0, None
+        M = self.dense(q)
+        shifted = (above * np.eye(self.nv) - M, M - below * np.eye(self.nv))
+        return 2, all(scipy.linalg.lapack.dpotrf(A, lower=1)[1] == 0 for A in shifted)
+
+    def _matrix(self, q: np.ndarray) -> np.ndarray | None:
+        """The dense M(q) for a recovery: ``dense``'s, else the provider's, else None."""
+        if self.dense is not None:
+            return self.dense(q)
+        gim_matrix = getattr(self.products, "gim_matrix", None)
+        return None if gim_matrix is None else gim_matrix()
 
     def _leading(self, end: _End, starts: list[np.ndarray], budget: int):
         block = np.empty((end.keep, self.nv))
@@ -202,7 +259,7 @@ class KappaTracker:
             np.array(starts),
             end.workspace,
             block,
-            rtol=self.rtol,
+            rtol=self.rtol * STOP,
             budget=budget,
             keep=end.keep,
         )
@@ -239,10 +296,10 @@ class KappaTracker:
         end.previous = None if end.block is None else end.block[-1].copy()
         end.theta, end.block = result[0], result[1]
         value = result[0] if end is self._ends[0] else 1.0 / result[0]
-        return value, count, fallback, result[2]
+        return value, count, fallback, CERTIFY * self.rtol
 
-    def _dense_sample(self, q: np.ndarray) -> TrackedKappa:
-        values, vectors = scipy.linalg.eigh(self.dense(q), check_finite=False)
+    def _dense_sample(self, matrix: np.ndarray) -> TrackedKappa:
+        values, vectors = scipy.linalg.eigh(matrix, check_finite=False)
         if values[0] <= 0:
             raise ConditioningError(f"M(q) must be positive definite, got λmin = {values[0]:.6g}")
         top, low = vectors[:, -2:].T, vectors[:, :2][:, ::-1].T
@@ -250,15 +307,16 @@ class KappaTracker:
         self._ends[1].theta, self._ends[1].block = float(1.0 / values[0]), low
         if self._denoc is not None:
             self._denoc.restart(values[-1], values[0], top, low)
+        kappa = extreme_ratio(values)
         return TrackedKappa(
-            kappa=extreme_ratio(values),
+            kappa=kappa,
             lambda_max=float(values[-1]),
             lambda_min=float(values[0]),
             products=0,
             products_max=0,
             products_min=0,
             fallback="dense",
-            error_estimate=0.0,
+            error_estimate=float(self.nv * np.finfo(float).eps * kappa),
             factors=0,
         )
 

@@ -64,10 +64,40 @@ class PinocchioProducts:
         self.nv = robot.nv
         self._zero = np.zeros(robot.nv)
         self._q = np.zeros(robot.nq)
+        self._diagonal: np.ndarray | None = None
 
     def configure(self, q: np.ndarray) -> None:
         """Set the configuration of the products."""
         self._q = np.asarray(q, dtype=float)
+        self._diagonal = None  # CRBA's M at q, computed when a certificate asks for it
+
+    def _crba(self) -> np.ndarray:
+        """CRBA's M at the configured q into ``data.M`` (upper triangle); its diagonal."""
+        if self._diagonal is None:
+            pin.crba(self.model, self.data, self._q)
+            self._diagonal = np.diag(self.data.M).copy()
+        return self._diagonal
+
+    def shifted_inertia(self, shift: float) -> tuple[int, int]:
+        """(positive, negative) pivots of M(q) − shift·1 (armature included).
+
+        Pinocchio's sparse LDLᵀ of CRBA's M (``pinocchio.cholesky.decompose``, the tree's
+        sparsity) with the shift on the diagonal: a congruence, so by Sylvester's law of inertia
+        the pivot signs count the eigenvalues of M above and below ``shift``.
+        """
+        diagonal = self._crba()
+        M = self.data.M  # a view of Pinocchio's buffer
+        M[np.diag_indices(self.nv)] = diagonal - shift
+        pin.cholesky.decompose(self.model, self.data)
+        M[np.diag_indices(self.nv)] = diagonal
+        pivots = np.asarray(self.data.D)
+        return int(np.count_nonzero(pivots > 0)), int(np.count_nonzero(pivots < 0))
+
+    def gim_matrix(self) -> np.ndarray:
+        """M(q) at the configured q (CRBA, symmetric), for a dense recovery."""
+        self._crba()
+        upper = np.triu(self.data.M)
+        return upper + np.triu(upper, 1).T
 
     def gim_product(self, x: np.ndarray) -> np.ndarray:
         """M(q) x."""
