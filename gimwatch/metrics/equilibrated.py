@@ -23,6 +23,7 @@ and δ do.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 
 import numpy as np
@@ -127,6 +128,18 @@ class ScaledProducts:
     def gim_solve(self, y: np.ndarray) -> np.ndarray:
         """S⁻¹ y."""
         return self.products.gim_solve(y / self.scale) / self.scale
+
+    def __getattr__(self, name: str):
+        # the Sylvester certificate of S exists where M's provider shifts by a diagonal:
+        # S − σ·1 = D^-1/2 (M − σ·D) D^-1/2 has the pivot signs of M − σ·D (a congruence)
+        if name == "shifted_inertia" and _shifts_by_diagonal(self.products):
+            return lambda shift: self.products.shifted_inertia(shift, weights=self.scale**-2)
+        raise AttributeError(name)
+
+
+def _shifts_by_diagonal(products) -> bool:
+    method = getattr(products, "shifted_inertia", None)
+    return method is not None and "weights" in inspect.signature(method).parameters
 
 
 def equilibrated_dense(dense: Callable[[np.ndarray], np.ndarray]):

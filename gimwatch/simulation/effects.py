@@ -35,7 +35,15 @@ from gimwatch.simulation.joint_values import joint_vector
 from gimwatch.simulation.parameters import Parameter
 from gimwatch.simulation.torque_laws import TORQUE_LAWS, CallableLaw
 
-__all__ = ["EFFECTS", "CallableTorque", "Effect", "Gravity", "build_effects", "joint_vector", "register"]
+__all__ = [
+    "EFFECTS",
+    "CallableTorque",
+    "Effect",
+    "Gravity",
+    "build_effects",
+    "joint_vector",
+    "register",
+]
 
 
 class Effect:

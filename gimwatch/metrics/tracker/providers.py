@@ -78,16 +78,17 @@ class PinocchioProducts:
             self._diagonal = np.diag(self.data.M).copy()
         return self._diagonal
 
-    def shifted_inertia(self, shift: float) -> tuple[int, int]:
-        """(positive, negative) pivots of M(q) − shift·1 (armature included).
+    def shifted_inertia(self, shift: float, weights: np.ndarray | None = None) -> tuple[int, int]:
+        """(positive, negative) pivots of M(q) − shift·W (armature included), W = diag(weights).
 
         Pinocchio's sparse LDLᵀ of CRBA's M (``pinocchio.cholesky.decompose``, the tree's
         sparsity) with the shift on the diagonal: a congruence, so by Sylvester's law of inertia
-        the pivot signs count the eigenvalues of M above and below ``shift``.
+        the pivot signs count the eigenvalues of M above and below ``shift`` (W = 1, the
+        default), or those of W^-1/2 M W^-1/2 for a positive diagonal W.
         """
         diagonal = self._crba()
         M = self.data.M  # a view of Pinocchio's buffer
-        M[np.diag_indices(self.nv)] = diagonal - shift
+        M[np.diag_indices(self.nv)] = diagonal - (shift if weights is None else shift * weights)
         pin.cholesky.decompose(self.model, self.data)
         M[np.diag_indices(self.nv)] = diagonal
         pivots = np.asarray(self.data.D)
