@@ -64,6 +64,7 @@ class DenocModel:
                 hint=f"expected the names {sorted(moving)}",
             )
         body_of = {name: i for i, name in enumerate(tree.joint_names) if name}
+        self._body_of = body_of
         self.joint_names: tuple[str, ...] = order
         self._q_index = np.zeros(tree.size, dtype=np.intp)
         self._root_q = 0
@@ -89,6 +90,21 @@ class DenocModel:
         self._v_index = np.concatenate(
             [v_of_body[i] + np.arange(widths[i]) for i in range(tree.size)]
         ).astype(np.intp)
+
+    @property
+    def dof_names(self) -> tuple[str, ...]:
+        """One name per velocity coordinate, public order (``name[k]`` for a joint of six)."""
+        if not hasattr(self, "_dof_names"):
+            names = [""] * self.nv
+            for name in self.joint_names:
+                body = self._body_of[name]
+                start = int(self._v_of_body[body])
+                if body == 0 or self.tree.kind[body] == FREE_KIND:
+                    names[start : start + 6] = [f"{name}[{k}]" for k in range(6)]
+                else:
+                    names[start] = name
+            self._dof_names = tuple(names)
+        return self._dof_names
 
     @classmethod
     def from_urdf(
@@ -286,14 +302,7 @@ class DenocModel:
 
     def _coordinate_name(self, k: int) -> str:
         """Joint name of public velocity coordinate k (``name[i]`` for a joint of six)."""
-        body_of = {name: i for i, name in enumerate(self.tree.joint_names) if name}
-        for name in self.joint_names:
-            body = body_of[name]
-            start = int(self._v_of_body[body])
-            six = body == 0 or self.tree.kind[body] == FREE_KIND
-            if start <= k < start + (6 if six else 1):
-                return f"{name}[{k - start}]" if six else name
-        raise IndexError(k)
+        return self.dof_names[k]
 
     def forward_dynamics_pivots(self, q: npt.ArrayLike) -> np.ndarray:
         """The backward (UDUᵀ) pivots d_i = p_iᵀ M̂_i p_i of the forward-dynamics recursion.
