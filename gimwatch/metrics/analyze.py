@@ -63,7 +63,7 @@ class Analysis:
 def choose_path(
     spec: str,
     *,
-    floating: bool | None = False,
+    floating: bool | None = None,
     backend: str = "auto",
     body: str = "",
     armature: bool = True,
@@ -79,7 +79,7 @@ def choose_path(
         return backend
     chain = parse_chain_spec(spec)
     if chain is not None:
-        return "denoc" if not floating and chain.n > DATA_NV_LIMIT else "crba"
+        return "denoc" if chain.n + 6 * bool(floating) > DATA_NV_LIMIT else "crba"
     robot = robot_for_path(spec, floating=floating, body=body, armature=armature)
     return "denoc" if robot.nv > DATA_NV_LIMIT else "crba"
 
