@@ -300,6 +300,12 @@ class LeanState:
         """Diag M(q), O(n)."""
         return self.model.gim_diagonal(self.q)[self._order]
 
+    @property
+    def centres_of_mass(self) -> np.ndarray:
+        """World positions of the bodies' centres of mass (N, 3), m (row 0: the root's)."""
+        vec = self.model._vec
+        return vec[:, fused.ORIGIN_ROW] + vec[:, fused.COM_OFFSET_ROW]
+
     def pivots(self) -> np.ndarray:
         """The UDUᵀ pivots (elimination from the tips), O(n)."""
         return self._pivots[self._order]

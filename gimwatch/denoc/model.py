@@ -184,15 +184,16 @@ class DenocModel:
     def energy(
         self, q: npt.ArrayLike, v: npt.ArrayLike, *, gravity: npt.ArrayLike = _GRAVITY
     ) -> tuple[float, float]:
-        """(kinetic ½ vᵀ M v, gravity potential -Σ m_i g·c_i) in J; fixed base only, O(n)."""
-        if self.linear is None:
-            raise InputError("the model", "a fixed-base tree of 1-DoF joints", "free joints")
+        """(kinetic ½ vᵀ M v, gravity potential -Σ m_i g·c_i) in J, O(n), any tree."""
         state = self.state(q)
         velocity = self.to_internal("v", v)
         kinetic = 0.5 * float(velocity @ state.matvec(velocity))
-        centres = state.centres_of_mass
-        potential = -float(self.tree.mass[1:] @ (centres @ _vector("gravity", gravity, 3)))
-        return kinetic, potential
+        g = _vector("gravity", gravity, 3)
+        if self.linear is not None:  # the moving bodies' centres, body 1 on
+            return kinetic, -float(self.tree.mass[1:] @ (state.centres_of_mass @ g))
+        first = 0 if self.tree.floating else 1  # a fixed root (the world) does not move
+        centres = state.centres_of_mass[first:]
+        return kinetic, -float(self.tree.mass[first:] @ (centres @ g))
 
     def permutation_to(self, order: Sequence[str]) -> np.ndarray:
         """Index array ``perm`` (nv,) with ``x_in_order = x[perm]`` for velocity-space vectors.
