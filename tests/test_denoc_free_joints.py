@@ -219,3 +219,18 @@ def test_free_joints_below_the_root_against_pinocchio():
         assert np.abs(qdd - pin.aba(model, data, q, v, tau)).max() <= 1e-11 * np.abs(qdd).max()
         kappa = extreme_eigenvalues(denoc.state(q)).kappa
         assert kappa == pytest.approx(np.linalg.cond(M), rel=1e-8)
+
+
+def test_the_limits_page_states_the_limits_of_the_code():
+    """docs/limits.md quotes DATA_NV_LIMIT and LINEAR_NV_LIMIT as the code has them."""
+    import re
+    from pathlib import Path
+
+    from gimwatch.metrics.analyze import LINEAR_NV_LIMIT
+
+    page = (Path(__file__).parents[1] / "docs" / "limits.md").read_text()
+    assert int(re.search(r"\*\*`DATA_NV_LIMIT` = (\d+)\*\*", page).group(1)) == DATA_NV_LIMIT
+    assert re.search(r"\| nv ≤ (\d+) \| nv > \1 \|", page).group(1) == str(DATA_NV_LIMIT)
+    quoted = re.search(r"`LINEAR_NV_LIMIT` = ([\d,]+) coordinates", page).group(1)
+    assert int(quoted.replace(",", "")) == LINEAR_NV_LIMIT
+    assert "80 free boxes, nv = 480" in page and len(_boxes(80).split("<freejoint")) - 1 == 80
