@@ -22,8 +22,9 @@ zero when shift = 0) and keeps the 6×6 factor of S in ``root[i]``.
 Packed inputs (built once by [`LeanModel`][gimwatch.denoc.LeanModel]):
 
 * ``index`` (N, 5) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic,
-  4 free: six DoF of the body relative to its parent, Pinocchio's free-flyer), index of the
-  body's first q entry, index of its v entry (for the root and free joints: of the first of six),
+  4 free: six DoF of the body relative to its parent, Pinocchio's free-flyer, 5 ball: its
+  three rotations, q a quaternion (x, y, z, w), v the angular velocity in the body frame),
+  index of the body's first q entry, index of its v entry (root, free, ball: of the first),
   1 when the joint's placement rotation is the identity (its product is skipped);
 * ``geometry`` (N, 28): axis (0:3), placement rotation row-major (3:12), placement translation
   (12:15), mass (15), centre of mass (16:19), inertia about it row-major (19:28).
@@ -142,16 +143,33 @@ def _quaternion_matrix(x, y, z, w, out):
 
 
 @njit(cache=True, inline="always")
-def _add_free_twist(rotation, x, k, out):
-    """Out += P x[k:k+6], P = [[0, R], [R, 0]]: local (v, ω) to the world twist [ω; v_O]."""
+def _width(kind):
+    """Velocity coordinates of a free (kind 4: six) or ball (kind 5: three) joint."""
+    return 3 if kind == 5 else 6
+
+
+@njit(cache=True, inline="always")
+def _add_free_twist(kind, rotation, x, k, out):
+    """Out += P x[k:k+w]: free P = [[0, R], [R, 0]] (local (v, ω)), ball P = [R; 0] (local ω).
+
+    Local velocities to the world twist [ω; v_O].
+    """
+    if kind == 5:
+        for a in range(3):
+            out[a] += rotation[a, 0] * x[k] + rotation[a, 1] * x[k + 1] + rotation[a, 2] * x[k + 2]
+        return
     for a in range(3):
         out[a] += rotation[a, 0] * x[k + 3] + rotation[a, 1] * x[k + 4] + rotation[a, 2] * x[k + 5]
         out[3 + a] += rotation[a, 0] * x[k] + rotation[a, 1] * x[k + 1] + rotation[a, 2] * x[k + 2]
 
 
 @njit(cache=True, inline="always")
-def _free_load(rotation, w, out):
-    """Out = Pᵀ w: the wrench [n; f] as the free joint's six generalized forces (Rᵀ f, Rᵀ n)."""
+def _free_load(kind, rotation, w, out):
+    """Out = Pᵀ w: the wrench [n; f] as the joint's generalized forces (Rᵀ f, Rᵀ n; ball: Rᵀ n)."""
+    if kind == 5:
+        for a in range(3):
+            out[a] = rotation[0, a] * w[0] + rotation[1, a] * w[1] + rotation[2, a] * w[2]
+        return
     for a in range(3):
         out[a] = rotation[0, a] * w[3] + rotation[1, a] * w[4] + rotation[2, a] * w[5]
         out[3 + a] = rotation[0, a] * w[0] + rotation[1, a] * w[1] + rotation[2, a] * w[2]
@@ -192,13 +210,15 @@ def _poses(q, index, geometry, floating, rot, vec):
             rot[i] = frame
             for r in range(3):
                 vec[i, _REACH, r] += vec[i, _AXIS, r] * q[k]
-        elif kind == 4:  # free: (x, y, z) in the joint frame, then the quaternion's turn
-            _quaternion_matrix(q[k + 3], q[k + 4], q[k + 5], q[k + 6], turn)
+        elif kind >= 4:  # free: (x, y, z) in the joint frame, then the quaternion's turn
+            kq = k + 3 if kind == 4 else k  # ball: the quaternion alone
+            _quaternion_matrix(q[kq], q[kq + 1], q[kq + 2], q[kq + 3], turn)
             for r in range(3):
                 vec[i, _AXIS, r] = 0.0
-                vec[i, _REACH, r] += (
-                    frame[r, 0] * q[k] + frame[r, 1] * q[k + 1] + frame[r, 2] * q[k + 2]
-                )
+                if kind == 4:
+                    vec[i, _REACH, r] += (
+                        frame[r, 0] * q[k] + frame[r, 1] * q[k + 1] + frame[r, 2] * q[k + 2]
+                    )
                 for cc in range(3):
                     rot[i, r, cc] = (
                         frame[r, 0] * turn[0, cc]
@@ -298,11 +318,16 @@ def _add_shifted_wrench(target, w, r):
 
 
 @njit(cache=True)
-def _root_system(rotation, articulated, columns, out):
-    """Pᵀ X P (6×6) for the free-flyer's columns P."""
+def _root_system(rotation, articulated, columns, out, kind=4):
+    """Pᵀ X P (w×w) for a free (6×6) or ball joint's (3×3) columns P."""
     _root_columns(rotation, columns)
-    for a in range(6):
-        for b in range(6):
+    if kind == 5:  # [R; 0]: the free-flyer's angular columns, moved first
+        for r in range(6):
+            for c in range(3):
+                columns[r, c] = columns[r, 3 + c]
+    w = _width(kind)
+    for a in range(w):
+        for b in range(w):
             acc = 0.0
             for r in range(6):
                 if columns[r, a] != 0.0:
@@ -312,13 +337,13 @@ def _root_system(rotation, articulated, columns, out):
 
 
 @njit(cache=True)
-def _udut6(matrix, root):
-    """UDUᵀ of a 6×6 (elimination from the last coordinate) into root[:6] (U) and root[6] (D)."""
+def _udut6(matrix, root, w=6):
+    """UDUᵀ of a w×w (elimination from the last coordinate) into root[:w] (U), root[6] (D)."""
     work = matrix.copy()
-    for k in range(5, -1, -1):
+    for k in range(w - 1, -1, -1):
         pivot = work[k, k]
         root[6, k] = pivot
-        for i in range(6):
+        for i in range(w):
             root[i, k] = 0.0 if i > k else (1.0 if i == k else work[i, k] / pivot)
         for a in range(k):
             for b in range(k):
@@ -326,15 +351,15 @@ def _udut6(matrix, root):
 
 
 @njit(cache=True)
-def _solve6(root, rhs, out):
-    """Out = (U D Uᵀ)⁻¹ rhs with the factor of `_udut6`."""
+def _solve6(root, rhs, out, w=6):
+    """Out = (U D Uᵀ)⁻¹ rhs with the w×w factor of `_udut6`."""
     z = np.empty(6)
-    for i in range(5, -1, -1):
+    for i in range(w - 1, -1, -1):
         acc = rhs[i]
-        for k in range(i + 1, 6):
+        for k in range(i + 1, w):
             acc -= root[i, k] * z[k]
         z[i] = acc
-    for i in range(6):
+    for i in range(w):
         acc = z[i] / root[6, i]
         for k in range(i):
             acc -= root[k, i] * out[k]
@@ -342,34 +367,36 @@ def _solve6(root, rhs, out):
 
 
 @njit(cache=True)
-def _factor_free(art, rotation, shift, factor, passed):
-    """A free joint's 6×6 system S = Pᵀ IA P − shift·1 factored into ``factor`` (UDUᵀ).
+def _factor_free(kind, art, rotation, shift, factor, passed):
+    """A free (ball) joint's 6×6 (3×3) system S = Pᵀ IA P − shift·1 factored (UDUᵀ).
 
-    Writes into ``passed`` what its parent receives, IA − U S⁻¹ Uᵀ with U = IA P (zero when
-    shift = 0, as P is invertible). Returns whether S's six pivots are positive.
+    Writes into ``passed`` what its parent receives, IA − U S⁻¹ Uᵀ with U = IA P (zero for
+    a free joint when shift = 0, as its P is invertible). Returns whether S's pivots are
+    positive.
     """
+    width = _width(kind)
     system = np.empty((6, 6))
     columns = np.empty((6, 6))
-    _root_system(rotation, art, columns, system)
-    for k in range(6):
+    _root_system(rotation, art, columns, system, kind)
+    for k in range(width):
         system[k, k] -= shift
-    _udut6(system, factor)
+    _udut6(system, factor, width)
     ok = True
-    for k in range(6):
+    for k in range(width):
         ok = ok and factor[6, k] > 0.0
     u = np.empty((6, 6))  # U = IA P
     for a in range(6):
-        for b in range(6):
+        for b in range(width):
             acc = 0.0
             for r in range(6):
                 acc += art[a, r] * columns[r, b]
             u[a, b] = acc
     w = np.empty(6)
     for b in range(6):  # column b of S⁻¹ Uᵀ is S⁻¹ (row b of U)
-        _solve6(factor, u[b], w)
+        _solve6(factor, u[b], w, width)
         for a in range(6):
             acc = 0.0
-            for k in range(6):
+            for k in range(width):
                 acc += u[a, k] * w[k]
             passed[a, b] = art[a, b] - acc
     return ok
@@ -395,8 +422,8 @@ def _factor(index, floating, rot, vec, block, six, scal, root, shift):
     for i in range(n - 1, 0, -1):
         kind = index[i, 1]
         j = index[i, 0]
-        if kind == 4:  # IA_i stays in block[i, 1] for the articulated pass
-            ok = _factor_free(block[i, 1], rot[i], shift, root[i], passed) and ok
+        if kind >= 4:  # IA_i stays in block[i, 1] for the articulated pass
+            ok = _factor_free(kind, block[i, 1], rot[i], shift, root[i], passed) and ok
             scal[i, 0] = 1.0
             if j > 0 or floating:
                 add_shift_congruence(block[j, 1], passed, vec[i, _REACH], scratch)
@@ -467,13 +494,18 @@ def _velocity_terms(v, index, geometry, floating, rot, vec, six):
         cross3(w0, vec[i, _REACH], t1)
         cross3(w0, t1, t2)  # ω_j × (ω_j × r)
         c = six[i, _C]
-        if kind == 4:
-            # relative twist P v: ω_rel = R ω_l, v_rel = R v_l; c = [ω_j × ω_rel;
+        if kind >= 4:
+            # relative twist P v: ω_rel = R ω_l, v_rel = R v_l (ball: 0); c = [ω_j × ω_rel;
             # ω_j × (ω_j × r) + (ω_j + ω_i) × v_rel] (d/dt of R x is ω_i × R x + R ẋ)
             k, r_i = index[i, 3], rot[i]
+            kw = k + 3 if kind == 4 else k
             for a in range(3):
-                rel_v[a] = r_i[a, 0] * v[k] + r_i[a, 1] * v[k + 1] + r_i[a, 2] * v[k + 2]
-                rel_w[a] = r_i[a, 0] * v[k + 3] + r_i[a, 1] * v[k + 4] + r_i[a, 2] * v[k + 5]
+                rel_v[a] = (
+                    r_i[a, 0] * v[k] + r_i[a, 1] * v[k + 1] + r_i[a, 2] * v[k + 2]
+                    if kind == 4
+                    else 0.0
+                )
+                rel_w[a] = r_i[a, 0] * v[kw] + r_i[a, 1] * v[kw + 1] + r_i[a, 2] * v[kw + 2]
                 vec[i, _OMEGA, a] = w0[a] + rel_w[a]
             cross3(w0, rel_w, t1)
             for a in range(3):
@@ -537,11 +569,11 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
     for i in range(n - 1, 0, -1):
         kind = index[i, 1]
         j = index[i, 0]
-        if kind == 4:
-            k = index[i, 3]
+        if kind >= 4:
+            k, width = index[i, 3], _width(kind)
             u6 = six[i, _U]
-            _free_load(rot[i], six[i, _WRENCH], load)
-            for a in range(6):
+            _free_load(kind, rot[i], six[i, _WRENCH], load)
+            for a in range(width):
                 u6[a] = tau[k + a] - load[a]
             if j > 0 or floating:
                 art = block[i, 1]
@@ -551,13 +583,13 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
                         for b in range(6):
                             acc += art[a, b] * six[i, _C, b]
                     wrench[a] = acc
-                _free_load(rot[i], wrench, load)
-                for a in range(6):
+                _free_load(kind, rot[i], wrench, load)
+                for a in range(width):
                     load[a] = u6[a] - load[a]
-                _solve6(root[i], load, z)
+                _solve6(root[i], load, z, width)
                 for a in range(6):  # c + P z
                     wrench[a] = six[i, _C, a] if moving else 0.0
-                _add_free_twist(rot[i], z, 0, wrench)
+                _add_free_twist(kind, rot[i], z, 0, wrench)
                 for a in range(6):
                     acc = six[i, _WRENCH, a]
                     for b in range(6):
@@ -611,21 +643,21 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
         if moving:
             for a in range(6):
                 rate[a] += six[i, _C, a]
-        if kind == 4:
-            art = block[i, 1]
+        if kind >= 4:
+            art, width = block[i, 1], _width(kind)
             for a in range(6):  # IA ṫ
                 acc = 0.0
                 for b in range(6):
                     acc += art[a, b] * rate[b]
                 wrench[a] = acc
-            _free_load(rot[i], wrench, load)
-            for a in range(6):
+            _free_load(kind, rot[i], wrench, load)
+            for a in range(width):
                 load[a] = six[i, _U, a] - load[a]
             k = index[i, 3]
-            _solve6(root[i], load, z)
-            for a in range(6):
+            _solve6(root[i], load, z, width)
+            for a in range(width):
                 out[k + a] = z[a]
-            _add_free_twist(rot[i], z, 0, rate)
+            _add_free_twist(kind, rot[i], z, 0, rate)
             continue
         dot = 0.0
         for a in range(6):
@@ -659,8 +691,8 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
         j, kind = index[i, 0], index[i, 1]
         rate = six[i, _RATE]
         _shift_rate(six[j, _RATE], vec[i, _REACH], rate)
-        if kind == 4:
-            _add_free_twist(rot[i], acc, index[i, 3], rate)
+        if kind >= 4:
+            _add_free_twist(kind, rot[i], acc, index[i, 3], rate)
         else:
             x = acc[index[i, 3]]
             kk = 3 if kind == 3 else 0
@@ -680,9 +712,9 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
             six[i, _WRENCH, a] = s
     load = np.empty(6)
     for i in range(n - 1, 0, -1):
-        if index[i, 1] == 4:
-            _free_load(rot[i], six[i, _WRENCH], load)
-            for a in range(6):
+        if index[i, 1] >= 4:
+            _free_load(index[i, 1], rot[i], six[i, _WRENCH], load)
+            for a in range(_width(index[i, 1])):
                 out[index[i, 3] + a] = load[a]
         else:
             out[index[i, 3]] = _p_dot(index[i, 1], vec[i, _AXIS], six[i, _WRENCH])
@@ -699,12 +731,17 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
 
 
 @njit(cache=True, inline="always")
-def _free_diagonal(c, r, k, out):
-    """A free body's six diagonal entries: the subtree's mass m (linear), R_aᵀ I_O R_a (angular)."""
+def _free_diagonal(c, r, k, out, kind=4):
+    """A free body's diagonal entries: the subtree's mass m (linear), R_aᵀ I_O R_a (angular).
+
+    A ball joint has the three angular ones only.
+    """
+    angular = k + 3 if kind == 4 else k
     for a in range(3):
-        out[k + a] = c[0]
+        if kind == 4:
+            out[k + a] = c[0]
         x, y, z = r[0, a], r[1, a], r[2, a]
-        out[k + 3 + a] = (
+        out[angular + a] = (
             c[4] * x * x
             + c[5] * y * y
             + c[6] * z * z
@@ -754,8 +791,8 @@ def gim_diagonal(q, index, geometry, floating, rot, vec, comp, out):
     for i in range(n - 1, 0, -1):
         c = comp[i]
         e0, e1, e2 = vec[i, _AXIS, 0], vec[i, _AXIS, 1], vec[i, _AXIS, 2]
-        if index[i, 1] == 4:
-            _free_diagonal(c, rot[i], index[i, 3], out)
+        if index[i, 1] >= 4:
+            _free_diagonal(c, rot[i], index[i, 3], out, index[i, 1])
         elif index[i, 1] == 3:
             out[index[i, 3]] = c[0]
         else:

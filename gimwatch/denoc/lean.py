@@ -127,20 +127,21 @@ class LeanModel:
     def factor_pivots(self, q: np.ndarray) -> np.ndarray:
         """The UDUᵀ pivots of M(q) (elimination from the tips), O(n); configures at q.
 
-        One per 1-DoF joint; six for the floating root and for each free joint (the UDUᵀ
-        pivots of its 6×6 articulated system). A pivot ≤ 0 (M singular) is returned, not
-        raised: the caller names it.
+        One per 1-DoF joint; six for the floating root and each free joint, three for each
+        ball joint (the UDUᵀ pivots of its 6×6 or 3×3 articulated system). A pivot ≤ 0
+        (M singular) is returned, not raised: the caller names it.
         """
         self._configured = bool(
             fused.configure(q, self._index, self._geometry, self.floating, *self._buffers())
         )
         out = np.empty(self.nv)
         kind, first = self._index[:, 1], self._index[:, 3]
-        single = np.flatnonzero(kind[1:] != 4) + 1
+        single = np.flatnonzero(kind[1:] < 4) + 1
         out[first[single]] = self._scal[single, 0]
-        six = list(np.flatnonzero(kind[1:] == 4) + 1) + ([0] if self.floating else [])
-        for i in six:
-            out[first[i] : first[i] + 6] = self._root[i, 6]
+        several = list(np.flatnonzero(kind[1:] >= 4) + 1) + ([0] if self.floating else [])
+        for i in several:
+            width = 3 if kind[i] == 5 else 6
+            out[first[i] : first[i] + width] = self._root[i, 6, :width]
         return out
 
     def _buffers(self) -> tuple:

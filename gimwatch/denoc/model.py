@@ -18,7 +18,7 @@ from gimwatch.denoc import recursions
 from gimwatch.denoc.chain import chain_body_tree
 from gimwatch.denoc.lean import LeanModel, LeanState
 from gimwatch.denoc.linear import ConfigurationState, LinearTimeModel
-from gimwatch.denoc.tree import FREE_FLYER_NAME, FREE_KIND, BodyTree, read_body_tree
+from gimwatch.denoc.tree import BALL_KIND, FREE_FLYER_NAME, FREE_KIND, BodyTree, read_body_tree
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.model.chains import ChainSpec
 
@@ -76,6 +76,10 @@ class DenocModel:
                 self._q_index[body], v_of_body[body] = nq, nv
                 nq, nv = nq + 7, nv + 6
                 continue
+            if tree.kind[body] == BALL_KIND:  # three rotations: q 4, v 3
+                self._q_index[body], v_of_body[body] = nq, nv
+                nq, nv = nq + 4, nv + 3
+                continue
             self._q_index[body], v_of_body[body] = nq, nv
             nq += 2 if tree.kind[body] == 2 else 1
             nv += 1
@@ -83,8 +87,9 @@ class DenocModel:
         self.nq, self.nv = nq, nv
         self._v_of_body = v_of_body
         #: the free joints below the root (several free bodies, several trees)
-        self.free_joints = bool(np.any(tree.kind == FREE_KIND))
-        widths = np.where(tree.kind == FREE_KIND, 6, 1)
+        self.free_joints = bool(np.any(tree.kind >= FREE_KIND))
+        widths = np.where(tree.kind == FREE_KIND, 6, np.where(tree.kind == BALL_KIND, 3, 1))
+        self._widths = widths
         widths[0] = 6 if tree.floating else 0
         #: internal coordinate k is public coordinate _v_index[k]
         self._v_index = np.concatenate(
@@ -98,9 +103,9 @@ class DenocModel:
             names = [""] * self.nv
             for name in self.joint_names:
                 body = self._body_of[name]
-                start = int(self._v_of_body[body])
-                if body == 0 or self.tree.kind[body] == FREE_KIND:
-                    names[start : start + 6] = [f"{name}[{k}]" for k in range(6)]
+                start, width = int(self._v_of_body[body]), int(self._widths[body])
+                if width > 1:
+                    names[start : start + width] = [f"{name}[{k}]" for k in range(width)]
                 else:
                     names[start] = name
             self._dof_names = tuple(names)
@@ -221,6 +226,8 @@ class DenocModel:
             free = np.zeros((tree.size, 7))
             for i in np.flatnonzero(kind == FREE_KIND):
                 free[i] = q[self._q_index[i] : self._q_index[i] + 7]
+            for i in np.flatnonzero(kind == BALL_KIND):
+                free[i, 3:] = q[self._q_index[i] : self._q_index[i] + 4]
         return recursions.kinematics(tree, cos, sin, displacement, root, free)
 
     # -- the GIM ----------------------------------------------------------------------

@@ -27,7 +27,7 @@ from gimwatch.denoc.spatial import (
     shift_twist,
     shift_wrench,
 )
-from gimwatch.denoc.tree import FREE_KIND, BodyTree
+from gimwatch.denoc.tree import BALL_KIND, FREE_KIND, BodyTree
 
 __all__ = [
     "Kinematics",
@@ -95,7 +95,8 @@ def kinematics(
         sin: sin q_i (N,), 0 elsewhere.
         displacement: q_i of prismatic joints (N,), m, 0 elsewhere.
         root_pose: Free-flyer (x, y, z, qx, qy, qz, qw), or None for a fixed base.
-        free_pose: (N, 7): each free joint's (x, y, z, qx, qy, qz, qw) in its row (None: none).
+        free_pose: (N, 7): each free joint's (x, y, z, qx, qy, qz, qw) in its row, each ball
+            joint's (0, 0, 0, qx, qy, qz, qw) (None: neither).
     """
     n = tree.size
     revolute = (tree.kind == 1) | (tree.kind == 2)
@@ -104,9 +105,9 @@ def kinematics(
     joint_translation = tree.placement_translation + np.einsum(
         "kij,kj->ki", tree.placement_rotation, tree.axis * displacement[:, None]
     )
-    for i in np.flatnonzero(tree.kind == FREE_KIND):  # placement, then the free motion
+    for i in np.flatnonzero(tree.kind >= FREE_KIND):  # placement, then the free motion
         joint_rotation[i] = tree.placement_rotation[i] @ _quaternion_matrix(*free_pose[i, 3:7])
-        joint_translation[i] += tree.placement_rotation[i] @ free_pose[i, :3]
+        joint_translation[i] += tree.placement_rotation[i] @ free_pose[i, :3]  # ball: 0
     rotation = np.empty((n, 3, 3))
     origin = np.zeros((n, 3))
     if root_pose is None:
@@ -155,14 +156,18 @@ def _free_columns(rotation: np.ndarray) -> np.ndarray:
 def _columns(tree: BodyTree, kin: Kinematics) -> tuple[np.ndarray, np.ndarray]:
     """The motion-propagation columns (nv, 6) and the body each belongs to (nv,).
 
-    One per 1-DoF body, six for the floating root and for each free joint, in body order.
+    One per 1-DoF body, six for the floating root and each free joint, three for each ball
+    joint, in body order.
     """
-    widths = np.where(tree.kind[1:] == FREE_KIND, 6, 1)
+    kind = tree.kind[1:]
+    widths = np.where(kind == FREE_KIND, 6, np.where(kind == BALL_KIND, 3, 1))
     body = np.repeat(np.arange(1, tree.size), widths)
     columns = kin.p[body]
     starts = np.cumsum(widths) - widths
-    for i in np.flatnonzero(tree.kind[1:] == FREE_KIND):
+    for i in np.flatnonzero(kind == FREE_KIND):
         columns[starts[i] : starts[i] + 6] = _free_columns(kin.rotation[i + 1]).T
+    for i in np.flatnonzero(kind == BALL_KIND):  # [R; 0]: the free joint's angular three
+        columns[starts[i] : starts[i] + 3] = _free_columns(kin.rotation[i + 1]).T[3:]
     if not tree.floating:
         return columns, body
     return np.vstack([kin.p_root.T, columns]), np.concatenate([np.zeros(6, np.intp), body])
@@ -281,8 +286,8 @@ def inverse_dynamics(
 
 def _one_dof_only(tree: BodyTree) -> None:
     """The NumPy dynamics below know 1-DoF joints only; free joints run compiled (`.fused`)."""
-    if np.any(tree.kind == FREE_KIND):
-        raise NotImplementedError("free joints below the root: use the compiled recursions")
+    if np.any(tree.kind >= FREE_KIND):
+        raise NotImplementedError("free and ball joints: use the compiled recursions")
 
 
 def udut_pivots_small(D: np.ndarray) -> np.ndarray:

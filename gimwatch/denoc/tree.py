@@ -8,8 +8,8 @@ walk from the root reaches them (children by joint name): a parent comes before 
 
 A tree made from arrays (`body_tree`, as `gimwatch.metrics.denoc_robot` does from a loaded
 robot) may also give any body a free joint (`FREE_KIND`: six DoF relative to its parent,
-Pinocchio's free-flyer) and hang several trees from a fixed root (the world): many free
-bodies, or robots side by side.
+Pinocchio's free-flyer) or a ball joint (`BALL_KIND`), and hang several trees from a fixed
+root (the world): many free bodies, or robots side by side.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from gimwatch.errors import URDFError
 from gimwatch.model.urdf_text import check_urdf
 
 __all__ = [
+    "BALL_KIND",
     "FREE_FLYER_NAME",
     "FREE_KIND",
     "JOINT_KINDS",
@@ -38,6 +39,9 @@ JOINT_KINDS = {"revolute": 1, "continuous": 2, "prismatic": 3}
 #: `BodyTree.kind` of a free joint: q = (x, y, z, qx, qy, qz, qw) of the body in the joint
 #: frame, v = (linear, angular velocity) in the body's frame (Pinocchio's free-flyer).
 FREE_KIND = 4
+#: `BodyTree.kind` of a ball joint: q = (qx, qy, qz, qw), v = the angular velocity in the
+#: body's frame (Pinocchio's spherical joint, MuJoCo's ``ball``).
+BALL_KIND = 5
 _SUPPORTED = (*JOINT_KINDS, "fixed")
 #: Name of the 6-DoF root joint, as in Pinocchio's free-flyer models.
 FREE_FLYER_NAME = "root_joint"
@@ -52,7 +56,8 @@ class BodyTree:
         floating: Whether the root body moves on a free-flyer.
         joint_names: Name of the joint above each body (``root_joint`` or ``""`` for the root).
         parent: Parent body of each body, -1 for the root.
-        kind: Joint code of each body (0 root, 1 revolute, 2 continuous, 3 prismatic, 4 free).
+        kind: Joint code of each body (0 root, 1 revolute, 2 continuous, 3 prismatic, 4 free,
+            5 ball).
         placement_rotation: Joint frame in the parent body's frame at q = 0 (N, 3, 3).
         placement_translation: Joint origin in the parent body's frame (N, 3), m.
         axis: Unit joint axis in the body's frame (N, 3); zero for the root and free joints.

@@ -105,7 +105,7 @@ def _limit(model: pin.Model, joint, urdf_kind: str) -> str:
 
 # `gimwatch.denoc.BodyTree.kind` of each URDF type, and of Pinocchio's free-flyer
 _KIND = {"revolute": 1, "continuous": 2, "prismatic": 3}
-_FREE_KIND = 4
+_FREE_KIND, _BALL_KIND = 4, 5
 
 
 def tree_arrays(model: pin.Model, *, source: str) -> dict:
@@ -113,7 +113,7 @@ def tree_arrays(model: pin.Model, *, source: str) -> dict:
 
     Body k is Pinocchio's joint k with its inertia (about its centre of mass, in the joint
     frame); body 0 is the world, fixed (``floating`` False); a free-flyer, gimwatch's or a
-    file's own, at the root or not, is a free joint of its body.
+    file's own, at the root or not, is a free joint of its body, a spherical joint a ball.
 
     Raises:
         RobotError: A joint DeNOC has no recursion for (a ball, planar, mimic or composite
@@ -125,6 +125,8 @@ def tree_arrays(model: pin.Model, *, source: str) -> dict:
         joint, shortname = model.joints[k], model.joints[k].shortname()
         if "FreeFlyer" in shortname:
             kind[k] = _FREE_KIND
+        elif shortname == "JointModelSpherical":
+            kind[k] = _BALL_KIND
         elif shortname in _ONE_DOF:
             kind[k] = _KIND[_ONE_DOF[shortname]]
             axis[k] = _joint_axis(shortname, joint)
@@ -133,7 +135,7 @@ def tree_arrays(model: pin.Model, *, source: str) -> dict:
             raise RobotError(
                 source,
                 f"joint {model.names[k]!r} ({shortname.removeprefix('JointModel')}) has no "
-                "O(n) DeNOC recursion (revolute, prismatic and free joints only)",
+                "O(n) DeNOC recursion (revolute, prismatic, ball and free joints only)",
             )
     return {
         "source": source,
