@@ -38,7 +38,7 @@ def _boxes(n: int, seed: int = 0) -> str:
 
 
 def _trees(free: int, arms: int) -> str:
-    """Free bases with a hinge and a slide below each, and fixed-base arms beside them."""
+    """Free bases with a hinge and a slide below each, fixed-base arms and ball-joint ropes."""
     parts = []
     for t in range(free):
         parts.append(
@@ -57,6 +57,16 @@ def _trees(free: int, arms: int) -> str:
             f'<body name="fore{t}" pos="0.5 0 0"><joint name="b{t}" axis="0 1 1"/>'
             '<geom type="box" size="0.2 0.05 0.05" mass="0.7" pos="0.2 0 0"/></body></body>'
         )
+    parts.append(  # a rope of ball joints hanging from the world, and one from a free body
+        '<body name="rope0" pos="0 -1 2"><joint name="r0" type="ball"/>'
+        '<geom type="capsule" fromto="0 0 0 0 0 -0.3" size="0.02" mass="0.3"/>'
+        '<body name="rope1" pos="0 0 -0.3"><joint name="r1" type="ball"/>'
+        '<geom type="capsule" fromto="0 0 0 0.1 0 -0.3" size="0.02" mass="0.2"/></body></body>'
+        '<body name="kite" pos="1 -1 2"><freejoint name="kite_free"/>'
+        '<geom type="box" size="0.3 0.2 0.01" mass="0.4"/>'
+        '<body name="tail" pos="0 -0.2 0"><joint name="tail_ball" type="ball"/>'
+        '<geom type="capsule" fromto="0 0 0 0 -0.4 0" size="0.01" mass="0.05"/></body></body>'
+    )
     return f'<mujoco model="trees"><worldbody>{"".join(parts)}</worldbody></mujoco>'
 
 
@@ -72,9 +82,12 @@ def _random_qpos(mj: mujoco.MjModel, rng) -> np.ndarray:
     qpos = np.empty(mj.nq)
     for j in range(mj.njnt):
         a = mj.jnt_qposadr[j]
+        quaternion = rng.standard_normal(4)
+        quaternion /= np.linalg.norm(quaternion)
         if mj.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE:
-            quaternion = rng.standard_normal(4)
-            qpos[a : a + 7] = [*rng.uniform(-2, 2, 3), *quaternion / np.linalg.norm(quaternion)]
+            qpos[a : a + 7] = [*rng.uniform(-2, 2, 3), *quaternion]
+        elif mj.jnt_type[j] == mujoco.mjtJoint.mjJNT_BALL:  # ω in the body frame, as ours
+            qpos[a : a + 4] = quaternion
         else:
             qpos[a] = rng.uniform(-3, 3)
     return qpos
@@ -102,9 +115,12 @@ def _mujoco_at(mj: mujoco.MjModel, qpos: np.ndarray):
 def _q_of(mj: mujoco.MjModel, qpos: np.ndarray) -> np.ndarray:
     """Gimwatch's q: MuJoCo's qpos with each quaternion (w, x, y, z) as (x, y, z, w)."""
     q = qpos.copy()
-    for j in np.flatnonzero(mj.jnt_type == mujoco.mjtJoint.mjJNT_FREE):
-        a = mj.jnt_qposadr[j] + 3
-        q[a : a + 4] = np.roll(qpos[a : a + 4], -1)
+    free, ball = int(mujoco.mjtJoint.mjJNT_FREE), int(mujoco.mjtJoint.mjJNT_BALL)
+    for j in range(mj.njnt):
+        kind = int(mj.jnt_type[j])
+        if kind in (free, ball):
+            a = mj.jnt_qposadr[j] + (3 if kind == free else 0)
+            q[a : a + 4] = np.roll(qpos[a : a + 4], -1)
     return q
 
 
@@ -158,19 +174,17 @@ def test_auto_takes_files_above_the_data_limit_to_the_o_n_path(tmp_path):
         analyze(str(path), backend="crba")
 
 
-def test_a_ball_joint_is_refused_by_name_on_the_o_n_path(tmp_path):
-    path = tmp_path / "ball.xml"
-    path.write_text(
-        '<mujoco><worldbody><body><freejoint/><geom size="0.1" mass="1"/></body>'
-        '<body name="b"><joint name="knee" type="ball"/><geom size="0.1" mass="1"/>'
-        "</body></worldbody></mujoco>"
-    )
-    with pytest.raises(RobotError, match="'knee' \\(Spherical\\) has no O\\(n\\) DeNOC"):
-        analyze(str(path), backend="denoc")
+def test_a_joint_without_a_recursion_is_refused_by_name():
+    """A planar joint (Pinocchio's; no MJCF or URDF joint makes one) is named, not misread."""
+    model = pin.Model()
+    k = model.addJoint(0, pin.JointModelPlanar(), pin.SE3.Identity(), "sled")
+    model.appendBodyToJoint(k, pin.Inertia.Random(), pin.SE3.Identity())
+    with pytest.raises(RobotError, match="'sled' \\(Planar\\) has no O\\(n\\) DeNOC"):
+        tree_arrays(model, source="planar")
 
 
 def _composed_model() -> pin.Model:
-    """Free joints at the root and below a hinge, a second tree with its own free joint."""
+    """Free joints at the root and below a hinge, ball joints, a tree with its own free joint."""
     rng = np.random.default_rng(1)
     model = pin.Model()
 
@@ -189,15 +203,18 @@ def _composed_model() -> pin.Model:
     add(a, pin.JointModelRZ(), "hinge_h")
     b = add(a, pin.JointModelRY(), "hinge_b")
     c = add(b, pin.JointModelFreeFlyer(), "free_c")  # six DoF of a body that is no root
-    add(c, pin.JointModelPrismaticUnaligned(axis), "slide_d")
+    d = add(c, pin.JointModelPrismaticUnaligned(axis), "slide_d")
+    add(d, pin.JointModelSpherical(), "ball_i")
     e = add(0, pin.JointModelRX(), "hinge_e")
     add(e, pin.JointModelRUBZ(), "continuous_f")
-    add(0, pin.JointModelFreeFlyer(), "free_g")
+    g = add(0, pin.JointModelFreeFlyer(), "free_g")
+    ball = add(g, pin.JointModelSpherical(), "ball_j")
+    add(ball, pin.JointModelFreeFlyer(), "free_k")  # six DoF below a ball
     return model
 
 
 def test_free_joints_below_the_root_against_pinocchio():
-    """CRBA's M, RNEA's τ and ABA's q̈ (gravity, v ≠ 0) of a composed model, and κ."""
+    """CRBA's M, RNEA's τ, ABA's q̈ (gravity, v ≠ 0), the energy and κ of a composed model."""
     model = _composed_model()
     data = model.createData()
     denoc = DenocModel(body_tree(**tree_arrays(model, source="composed")), model.names[1:])
@@ -219,6 +236,9 @@ def test_free_joints_below_the_root_against_pinocchio():
         assert np.abs(qdd - pin.aba(model, data, q, v, tau)).max() <= 1e-11 * np.abs(qdd).max()
         kappa = extreme_eigenvalues(denoc.state(q)).kappa
         assert kappa == pytest.approx(np.linalg.cond(M), rel=1e-8)
+        kinetic, potential = denoc.energy(q, v, gravity=gravity)
+        assert kinetic == pytest.approx(pin.computeKineticEnergy(model, data, q, v), rel=1e-12)
+        assert potential == pytest.approx(pin.computePotentialEnergy(model, data, q), rel=1e-12)
 
 
 def test_the_limits_page_states_the_limits_of_the_code():
