@@ -76,7 +76,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=("auto", "crba", "denoc"),
         default="auto",
         help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; URDF and "
-        "MJCF trees of hinges, slides and free joints, several trees); auto: denoc above "
+        "MJCF trees of hinges, slides, ball and free joints, several trees); auto: denoc above "
         f"nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
     )
     # --explain (issue 25): the modes of λmin and λmax at each configuration, dense path only

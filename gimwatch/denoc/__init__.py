@@ -8,9 +8,9 @@ and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can che
 
 * [`DenocModel`][gimwatch.denoc.DenocModel] — any URDF tree, fixed or floating base, in Pinocchio's
   coordinate layout; the recursions batched per tree depth in NumPy (`.recursions`). A tree
-  made from arrays ([`body_tree`][gimwatch.denoc.body_tree]) may also have free joints on any
-  body and several trees (many free bodies, robots side by side); its O(n) operators are a
-  [`LeanState`][gimwatch.denoc.LeanState].
+  made from arrays ([`body_tree`][gimwatch.denoc.body_tree]) may also have ball and free
+  joints on any body and several trees (many free bodies, robots side by side); its O(n)
+  operators are a [`LeanState`][gimwatch.denoc.LeanState].
 * [`LeanModel`][gimwatch.denoc.LeanModel] — the O(n) operations (diag M, M·x, M⁻¹·y, forward and
   inverse dynamics) as one compiled call each with preallocated buffers, fixed and floating bases,
   in Pinocchio's coordinate order (`.fused`); ``DenocModel.lean()`` builds it.

@@ -4,7 +4,7 @@ The dense path forms M with Pinocchio's CRBA and gives every metric and the whol
 the O(n) path (`gimwatch.metrics.linear_analysis`) never forms M nor builds a Pinocchio
 Data, whose memory grows as nv³. `choose_path` picks it: above `DATA_NV_LIMIT` (400)
 coordinates a robot goes the O(n) way — a generated chain, a URDF or MJCF file, fixed or
-floating, with free joints on any body and several trees — everything else the dense way,
+floating, with ball and free joints on any body and several trees — everything else the dense way,
 unless the caller asks for one.
 """
 

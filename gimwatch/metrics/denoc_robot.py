@@ -28,7 +28,7 @@ def denoc_model(robot: Robot, *, parse: bool = False, rigid: bool = False) -> De
 
     Raises:
         URDFError: DeNOC cannot read the robot's URDF (a joint type it lacks).
-        RobotError: A joint DeNOC has no recursion for (an MJCF ball joint), named.
+        RobotError: A joint DeNOC has no recursion for (a planar or composite joint), named.
         InputError: The robot has armature and ``rigid`` is False.
     """
     if not rigid and np.any(np.asarray(robot.model.armature) != 0):

@@ -2,7 +2,7 @@
 
 Pinocchio's Data for an n-joint model needs memory growing as n³ (about 1.8 GB at n = 300,
 8 GB at 500), and the dense GIM n². Above `DATA_NV_LIMIT` joints
-(or on request) gimwatch analyses chains and trees — fixed or floating, with free joints on
+(or on request) gimwatch analyses chains and trees — fixed or floating, with ball and free joints on
 any body and several trees — with the compiled DeNOC recursions instead: diag M and δ in
 O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each);
 the backward (UDUᵀ) pivots from the articulated-body factor. The forward (LDLᵀ) pivots and
