@@ -148,7 +148,7 @@ def _width(kind):
     return 3 if kind == 5 else 6
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)  # not inlined: the 1-DoF loops stay small
 def _add_free_twist(kind, rotation, x, k, out):
     """Out += P x[k:k+w]: free P = [[0, R], [R, 0]] (local (v, ω)), ball P = [R; 0] (local ω).
 
@@ -163,7 +163,7 @@ def _add_free_twist(kind, rotation, x, k, out):
         out[3 + a] += rotation[a, 0] * x[k] + rotation[a, 1] * x[k + 1] + rotation[a, 2] * x[k + 2]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)  # not inlined: the 1-DoF loops stay small
 def _free_load(kind, rotation, w, out):
     """Out = Pᵀ w: the wrench [n; f] as the joint's generalized forces (Rᵀ f, Rᵀ n; ball: Rᵀ n)."""
     if kind == 5:
@@ -730,7 +730,7 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
             out[k + a] = s
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)  # not inlined: the 1-DoF loops stay small
 def _free_diagonal(c, r, k, out, kind=4):
     """A free body's diagonal entries: the subtree's mass m (linear), R_aᵀ I_O R_a (angular).
 
