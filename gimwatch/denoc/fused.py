@@ -552,6 +552,66 @@ def _velocity_terms(v, index, geometry, floating, rot, vec, six):
 
 
 @njit(cache=True, error_model="numpy")
+def _free_bias_up(i, kind, passes, tau, moving, index, rot, vec, block, six, root):
+    """A free or ball joint's body in `_articulated_pass` from the tips: u, and its parent's share.
+
+    Keeps u = τ_i − Pᵀ pA_i in its U row; passes pA + IA (c + P z), z = S⁻¹ (u − Pᵀ IA c).
+    """
+    load = np.empty(6)
+    wrench = np.empty(6)
+    z = np.empty(6)
+    k, width = index[i, 3], _width(kind)
+    u6 = six[i, _U]
+    _free_load(kind, rot[i], six[i, _WRENCH], load)
+    for a in range(width):
+        u6[a] = tau[k + a] - load[a]
+    if not passes:
+        return
+    art = block[i, 1]
+    for a in range(6):  # IA c, then u − Pᵀ IA c
+        acc = 0.0
+        if moving:
+            for b in range(6):
+                acc += art[a, b] * six[i, _C, b]
+        wrench[a] = acc
+    _free_load(kind, rot[i], wrench, load)
+    for a in range(width):
+        load[a] = u6[a] - load[a]
+    _solve6(root[i], load, z, width)
+    for a in range(6):  # c + P z
+        wrench[a] = six[i, _C, a] if moving else 0.0
+    _add_free_twist(kind, rot[i], z, 0, wrench)
+    for a in range(6):
+        acc = six[i, _WRENCH, a]
+        for b in range(6):
+            acc += art[a, b] * wrench[b]
+        load[a] = acc
+    _add_shifted_wrench(six[index[i, 0], _WRENCH], load, vec[i, _REACH])
+
+
+@njit(cache=True, error_model="numpy")
+def _free_acceleration(i, kind, index, rot, block, six, root, rate, out):
+    """A free or ball joint's q̈ = S⁻¹ (u − Pᵀ IA ṫ) from the root, and its body's ṫ += P q̈."""
+    load = np.empty(6)
+    wrench = np.empty(6)
+    z = np.empty(6)
+    art, width = block[i, 1], _width(kind)
+    for a in range(6):  # IA ṫ
+        acc = 0.0
+        for b in range(6):
+            acc += art[a, b] * rate[b]
+        wrench[a] = acc
+    _free_load(kind, rot[i], wrench, load)
+    for a in range(width):
+        load[a] = six[i, _U, a] - load[a]
+    k = index[i, 3]
+    _solve6(root[i], load, z, width)
+    for a in range(width):
+        out[k + a] = z[a]
+    _add_free_twist(kind, rot[i], z, 0, rate)
+
+
+@njit(cache=True, error_model="numpy")
 def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out):
     """q̈ = M⁻¹ (τ − C q̇ + g) on the factor: bias wrenches from the tips, q̈ from the root.
 
@@ -561,8 +621,6 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
     """
     n = index.shape[0]
     wrench = np.empty(6)
-    load = np.empty(6)
-    z = np.empty(6)
     for i in range(n):
         for a in range(6):
             six[i, _WRENCH, a] = six[i, _B, a] if moving else 0.0
@@ -570,32 +628,9 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
         kind = index[i, 1]
         j = index[i, 0]
         if kind >= 4:
-            k, width = index[i, 3], _width(kind)
-            u6 = six[i, _U]
-            _free_load(kind, rot[i], six[i, _WRENCH], load)
-            for a in range(width):
-                u6[a] = tau[k + a] - load[a]
-            if j > 0 or floating:
-                art = block[i, 1]
-                for a in range(6):  # IA c, then u − Pᵀ IA c
-                    acc = 0.0
-                    if moving:
-                        for b in range(6):
-                            acc += art[a, b] * six[i, _C, b]
-                    wrench[a] = acc
-                _free_load(kind, rot[i], wrench, load)
-                for a in range(width):
-                    load[a] = u6[a] - load[a]
-                _solve6(root[i], load, z, width)
-                for a in range(6):  # c + P z
-                    wrench[a] = six[i, _C, a] if moving else 0.0
-                _add_free_twist(kind, rot[i], z, 0, wrench)
-                for a in range(6):
-                    acc = six[i, _WRENCH, a]
-                    for b in range(6):
-                        acc += art[a, b] * wrench[b]
-                    load[a] = acc
-                _add_shifted_wrench(six[j, _WRENCH], load, vec[i, _REACH])
+            _free_bias_up(
+                i, kind, j > 0 or floating, tau, moving, index, rot, vec, block, six, root
+            )
             continue
         u = tau[index[i, 3]] - _p_dot(kind, vec[i, _AXIS], six[i, _WRENCH])
         scal[i, 1] = u
@@ -644,20 +679,7 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
             for a in range(6):
                 rate[a] += six[i, _C, a]
         if kind >= 4:
-            art, width = block[i, 1], _width(kind)
-            for a in range(6):  # IA ṫ
-                acc = 0.0
-                for b in range(6):
-                    acc += art[a, b] * rate[b]
-                wrench[a] = acc
-            _free_load(kind, rot[i], wrench, load)
-            for a in range(width):
-                load[a] = six[i, _U, a] - load[a]
-            k = index[i, 3]
-            _solve6(root[i], load, z, width)
-            for a in range(width):
-                out[k + a] = z[a]
-            _add_free_twist(kind, rot[i], z, 0, rate)
+            _free_acceleration(i, kind, index, rot, block, six, root, rate, out)
             continue
         dot = 0.0
         for a in range(6):
