@@ -461,7 +461,10 @@ BAD_ARGUMENTS = [
     (["analyze", "chain:1000000"], "the N of chain:N must be at most 200000, got 1000000"),
     (["analyze", "chain:4", "--backend", "denoc", "--metrics", "kappa,x"], "metrics must be among"),
     (["analyze", "chain:4", "--metrics", "kappa"], "--metrics must be used with the O(n) path"),
-    (["analyze", "chain:396", "--floating"], "nv = 402 is too large for Pinocchio's Data"),
+    (
+        ["analyze", "chain:396", "--floating", "--backend", "crba"],
+        "nv = 402 is too large for Pinocchio's Data",
+    ),
     (["analyze", "nope"], "robot 'nope': not chain:N"),
     (["analyze"], "the following arguments are required: ROBOT"),
     ([], "the following arguments are required: command"),

@@ -76,8 +76,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--backend",
         choices=("auto", "crba", "denoc"),
         default="auto",
-        help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; fixed "
-        f"base); auto: denoc above nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
+        help="crba: dense M from Pinocchio; denoc: the O(n) path (no Data, no dense M; URDF and "
+        "MJCF trees of hinges, slides, ball and free joints, several trees); auto: denoc above "
+        f"nv = {DATA_NV_LIMIT}, where Pinocchio's Data needs GBs",
     )
     # --explain (issue 25): the modes of λmin and λmax at each configuration, dense path only
     parser.add_argument(
@@ -124,11 +125,18 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _analysis(spec: str, args: argparse.Namespace):
-    linear = choose_path(spec, floating=args.floating, backend=args.backend) == "denoc"
+    linear = (
+        choose_path(
+            spec,
+            floating=args.floating,
+            backend=args.backend,
+            body=args.body,
+            armature=not args.no_armature,
+        )
+        == "denoc"
+    )
     if args.metrics is not None and not linear:
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
-    if linear and args.floating:
-        raise InputError("--floating", "left out with --backend denoc (fixed bases only)", True)
     if args.explain and (linear or args.csv):
         raise InputError("--explain", "used on the dense path, without --csv", True)
     return analyze(

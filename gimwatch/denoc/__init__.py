@@ -7,7 +7,10 @@ and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can che
 (``gimwatch crosscheck``). It never imports pinocchio.
 
 * [`DenocModel`][gimwatch.denoc.DenocModel] — any URDF tree, fixed or floating base, in Pinocchio's
-  coordinate layout; the recursions batched per tree depth in NumPy (`.recursions`).
+  coordinate layout; the recursions batched per tree depth in NumPy (`.recursions`). A tree
+  made from arrays ([`body_tree`][gimwatch.denoc.body_tree]) may also have ball and free
+  joints on any body and several trees (many free bodies, robots side by side); its O(n)
+  operators are a [`LeanState`][gimwatch.denoc.LeanState].
 * [`LeanModel`][gimwatch.denoc.LeanModel] — the O(n) operations (diag M, M·x, M⁻¹·y, forward and
   inverse dynamics) as one compiled call each with preallocated buffers, fixed and floating bases,
   in Pinocchio's coordinate order (`.fused`); ``DenocModel.lean()`` builds it.
@@ -17,7 +20,7 @@ and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can che
 """
 
 from gimwatch.denoc.chain import chain_body_tree
-from gimwatch.denoc.lean import LeanModel
+from gimwatch.denoc.lean import LeanModel, LeanState
 from gimwatch.denoc.linear import (
     ConfigurationState,
     LinearTimeModel,
@@ -25,15 +28,17 @@ from gimwatch.denoc.linear import (
     extreme_eigenvalues,
 )
 from gimwatch.denoc.model import DenocModel
-from gimwatch.denoc.tree import BodyTree, read_body_tree
+from gimwatch.denoc.tree import BodyTree, body_tree, read_body_tree
 
 __all__ = [
     "BodyTree",
     "ConfigurationState",
     "DenocModel",
     "LeanModel",
+    "LeanState",
     "LinearTimeModel",
     "MatrixFreeKappa",
+    "body_tree",
     "chain_body_tree",
     "extreme_eigenvalues",
     "read_body_tree",

@@ -13,12 +13,18 @@ Arrays cover the whole tree, root included (body 0). With a fixed base body 0 is
 its acceleration is ``[0; −g]`` (gravity as an upward acceleration of the base) and nothing is
 passed to it. With a floating base body 0 moves on Pinocchio's free-flyer: q = (x, y, z, qx,
 qy, qz, qw), v = (local linear, local angular), and its six columns are
-``P = [[0, R], [R, 0]]`` (local ``[v; ω]`` to the world twist ``[ω; v_O]``).
+``P = [[0, R], [R, 0]]`` (local ``[v; ω]`` to the world twist ``[ω; v_O]``). A free joint
+(kind 4) on any other body is the same six columns with that body's R: several free bodies
+and several trees (children of a fixed body 0, the world) are ordinary trees here. Such a body
+passes its parent the articulated inertia IA − U S⁻¹ Uᵀ (U = IA P, S = Pᵀ IA P − shift·1;
+zero when shift = 0) and keeps the 6×6 factor of S in ``root[i]``.
 
 Packed inputs (built once by [`LeanModel`][gimwatch.denoc.LeanModel]):
 
-* ``index`` (N, 5) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic),
-  index of the body's first q entry, index of its v entry (for the root: of the first of six),
+* ``index`` (N, 5) int64: parent, joint kind (0 root, 1 revolute, 2 continuous, 3 prismatic,
+  4 free: six DoF of the body relative to its parent, Pinocchio's free-flyer, 5 ball: its
+  three rotations, q a quaternion (x, y, z, w), v the angular velocity in the body frame),
+  index of the body's first q entry, index of its v entry (root, free, ball: of the first),
   1 when the joint's placement rotation is the identity (its product is skipped);
 * ``geometry`` (N, 28): axis (0:3), placement rotation row-major (3:12), placement translation
   (12:15), mass (15), centre of mass (16:19), inertia about it row-major (19:28).
@@ -26,10 +32,11 @@ Packed inputs (built once by [`LeanModel`][gimwatch.denoc.LeanModel]):
 Buffers: ``rot`` (N, 3, 3); ``vec`` (N, 5, 3) = origin, reach r_i = O_i − O_parent, world axis
 e_i, centre-of-mass offset d_i, angular velocity ω_i; ``six`` (N, 5, 6) = U_i, velocity bias
 c_i, bias wrench b_i, twist rate, wrench; ``block`` (N, 2, 6, 6) = M_i, composite /
-articulated M̃_i; ``scal`` (N, 2) = pivot D_i, u_i; ``root`` (7, 6) = the free-flyer's 6×6
-UDUᵀ factor (rows 0–5 U, row 6 D); ``comp`` (N, 10) = the composite mass, first moment and
-rotational inertia the diagonal needs. Conventions and equations as in `.recursions`
-(Shah & Saha 2013, Eqs. 11–13; Saha's DeNOC; Featherstone's articulated-body algorithm).
+articulated M̃_i; ``scal`` (N, 2) = pivot D_i, u_i; ``root`` (N, 7, 6) = the 6×6 UDUᵀ factor
+(rows 0–5 U, row 6 D) of the floating root (``root[0]``) and of each free joint's body;
+``comp`` (N, 10) = the composite mass, first moment and rotational inertia the diagonal
+needs. Conventions and equations as in `.recursions` (Shah & Saha 2013, Eqs. 11–13; Saha's
+DeNOC; Featherstone's articulated-body algorithm).
 """
 
 from __future__ import annotations
@@ -115,6 +122,59 @@ def _root_columns(rotation, out):
             out[3 + r, c] = rotation[r, c]
 
 
+@njit(cache=True, inline="always")
+def _quaternion_matrix(x, y, z, w, out):
+    """The rotation of the unit quaternion (x, y, z, w) into out (Eigen's formula)."""
+    out[0, 0], out[0, 1], out[0, 2] = (
+        1 - 2 * (y * y + z * z),
+        2 * (x * y - z * w),
+        2 * (x * z + y * w),
+    )
+    out[1, 0], out[1, 1], out[1, 2] = (
+        2 * (x * y + z * w),
+        1 - 2 * (x * x + z * z),
+        2 * (y * z - x * w),
+    )
+    out[2, 0], out[2, 1], out[2, 2] = (
+        2 * (x * z - y * w),
+        2 * (y * z + x * w),
+        1 - 2 * (x * x + y * y),
+    )
+
+
+@njit(cache=True, inline="always")
+def _width(kind):
+    """Velocity coordinates of a free (kind 4: six) or ball (kind 5: three) joint."""
+    return 3 if kind == 5 else 6
+
+
+@njit(cache=True)  # not inlined: the 1-DoF loops stay small
+def _add_free_twist(kind, rotation, x, k, out):
+    """Out += P x[k:k+w]: free P = [[0, R], [R, 0]] (local (v, ω)), ball P = [R; 0] (local ω).
+
+    Local velocities to the world twist [ω; v_O].
+    """
+    if kind == 5:
+        for a in range(3):
+            out[a] += rotation[a, 0] * x[k] + rotation[a, 1] * x[k + 1] + rotation[a, 2] * x[k + 2]
+        return
+    for a in range(3):
+        out[a] += rotation[a, 0] * x[k + 3] + rotation[a, 1] * x[k + 4] + rotation[a, 2] * x[k + 5]
+        out[3 + a] += rotation[a, 0] * x[k] + rotation[a, 1] * x[k + 1] + rotation[a, 2] * x[k + 2]
+
+
+@njit(cache=True)  # not inlined: the 1-DoF loops stay small
+def _free_load(kind, rotation, w, out):
+    """Out = Pᵀ w: the wrench [n; f] as the joint's generalized forces (Rᵀ f, Rᵀ n; ball: Rᵀ n)."""
+    if kind == 5:
+        for a in range(3):
+            out[a] = rotation[0, a] * w[0] + rotation[1, a] * w[1] + rotation[2, a] * w[2]
+        return
+    for a in range(3):
+        out[a] = rotation[0, a] * w[3] + rotation[1, a] * w[4] + rotation[2, a] * w[5]
+        out[3 + a] = rotation[0, a] * w[0] + rotation[1, a] * w[1] + rotation[2, a] * w[2]
+
+
 @njit(cache=True)
 def _poses(q, index, geometry, floating, rot, vec):
     """Body orientations R_i, origins O_i, reaches r_i = O_i − O_parent, world axes e_i."""
@@ -129,22 +189,7 @@ def _poses(q, index, geometry, floating, rot, vec):
         vec[0, _AXIS, a] = 0.0
     if floating:
         k = index[0, 2]
-        x, y, z, w = q[k + 3], q[k + 4], q[k + 5], q[k + 6]
-        rot[0, 0, 0], rot[0, 0, 1], rot[0, 0, 2] = (
-            1 - 2 * (y * y + z * z),
-            2 * (x * y - z * w),
-            2 * (x * z + y * w),
-        )
-        rot[0, 1, 0], rot[0, 1, 1], rot[0, 1, 2] = (
-            2 * (x * y + z * w),
-            1 - 2 * (x * x + z * z),
-            2 * (y * z - x * w),
-        )
-        rot[0, 2, 0], rot[0, 2, 1], rot[0, 2, 2] = (
-            2 * (x * z - y * w),
-            2 * (y * z + x * w),
-            1 - 2 * (x * x + y * y),
-        )
+        _quaternion_matrix(q[k + 3], q[k + 4], q[k + 5], q[k + 6], rot[0])
         for a in range(3):
             vec[0, _ORIGIN, a] = q[k + a]
     for i in range(1, n):
@@ -165,6 +210,21 @@ def _poses(q, index, geometry, floating, rot, vec):
             rot[i] = frame
             for r in range(3):
                 vec[i, _REACH, r] += vec[i, _AXIS, r] * q[k]
+        elif kind >= 4:  # free: (x, y, z) in the joint frame, then the quaternion's turn
+            kq = k + 3 if kind == 4 else k  # ball: the quaternion alone
+            _quaternion_matrix(q[kq], q[kq + 1], q[kq + 2], q[kq + 3], turn)
+            for r in range(3):
+                vec[i, _AXIS, r] = 0.0
+                if kind == 4:
+                    vec[i, _REACH, r] += (
+                        frame[r, 0] * q[k] + frame[r, 1] * q[k + 1] + frame[r, 2] * q[k + 2]
+                    )
+                for cc in range(3):
+                    rot[i, r, cc] = (
+                        frame[r, 0] * turn[0, cc]
+                        + frame[r, 1] * turn[1, cc]
+                        + frame[r, 2] * turn[2, cc]
+                    )
         else:
             if kind == 1:
                 s, c = np.sin(q[k]), np.cos(q[k])
@@ -258,11 +318,16 @@ def _add_shifted_wrench(target, w, r):
 
 
 @njit(cache=True)
-def _root_system(rotation, articulated, columns, out):
-    """Pᵀ X P (6×6) for the free-flyer's columns P."""
+def _root_system(rotation, articulated, columns, out, kind=4):
+    """Pᵀ X P (w×w) for a free (6×6) or ball joint's (3×3) columns P."""
     _root_columns(rotation, columns)
-    for a in range(6):
-        for b in range(6):
+    if kind == 5:  # [R; 0]: the free-flyer's angular columns, moved first
+        for r in range(6):
+            for c in range(3):
+                columns[r, c] = columns[r, 3 + c]
+    w = _width(kind)
+    for a in range(w):
+        for b in range(w):
             acc = 0.0
             for r in range(6):
                 if columns[r, a] != 0.0:
@@ -272,13 +337,13 @@ def _root_system(rotation, articulated, columns, out):
 
 
 @njit(cache=True)
-def _udut6(matrix, root):
-    """UDUᵀ of a 6×6 (elimination from the last coordinate) into root[:6] (U) and root[6] (D)."""
+def _udut6(matrix, root, w=6):
+    """UDUᵀ of a w×w (elimination from the last coordinate) into root[:w] (U), root[6] (D)."""
     work = matrix.copy()
-    for k in range(5, -1, -1):
+    for k in range(w - 1, -1, -1):
         pivot = work[k, k]
         root[6, k] = pivot
-        for i in range(6):
+        for i in range(w):
             root[i, k] = 0.0 if i > k else (1.0 if i == k else work[i, k] / pivot)
         for a in range(k):
             for b in range(k):
@@ -286,19 +351,55 @@ def _udut6(matrix, root):
 
 
 @njit(cache=True)
-def _solve6(root, rhs, out):
-    """Out = (U D Uᵀ)⁻¹ rhs with the factor of `_udut6`."""
+def _solve6(root, rhs, out, w=6):
+    """Out = (U D Uᵀ)⁻¹ rhs with the w×w factor of `_udut6`."""
     z = np.empty(6)
-    for i in range(5, -1, -1):
+    for i in range(w - 1, -1, -1):
         acc = rhs[i]
-        for k in range(i + 1, 6):
+        for k in range(i + 1, w):
             acc -= root[i, k] * z[k]
         z[i] = acc
-    for i in range(6):
+    for i in range(w):
         acc = z[i] / root[6, i]
         for k in range(i):
             acc -= root[k, i] * out[k]
         out[i] = acc
+
+
+@njit(cache=True)
+def _factor_free(kind, art, rotation, shift, factor, passed):
+    """A free (ball) joint's 6×6 (3×3) system S = Pᵀ IA P − shift·1 factored (UDUᵀ).
+
+    Writes into ``passed`` what its parent receives, IA − U S⁻¹ Uᵀ with U = IA P (zero for
+    a free joint when shift = 0, as its P is invertible). Returns whether S's pivots are
+    positive.
+    """
+    width = _width(kind)
+    system = np.empty((6, 6))
+    columns = np.empty((6, 6))
+    _root_system(rotation, art, columns, system, kind)
+    for k in range(width):
+        system[k, k] -= shift
+    _udut6(system, factor, width)
+    ok = True
+    for k in range(width):
+        ok = ok and factor[6, k] > 0.0
+    u = np.empty((6, 6))  # U = IA P
+    for a in range(6):
+        for b in range(width):
+            acc = 0.0
+            for r in range(6):
+                acc += art[a, r] * columns[r, b]
+            u[a, b] = acc
+    w = np.empty(6)
+    for b in range(6):  # column b of S⁻¹ Uᵀ is S⁻¹ (row b of U)
+        _solve6(factor, u[b], w, width)
+        for a in range(6):
+            acc = 0.0
+            for k in range(width):
+                acc += u[a, k] * w[k]
+            passed[a, b] = art[a, b] - acc
+    return ok
 
 
 @njit(cache=True, error_model="numpy")
@@ -307,17 +408,26 @@ def _factor(index, floating, rot, vec, block, six, scal, root, shift):
 
     The shift enters the pivots as a (negative) armature would: D_i = p_iᵀ IA_i p_i − shift,
     IA_i − U_i U_iᵀ / D_i passed on; with a floating base the free-flyer's 6×6 system
-    Pᵀ IA_0 P − shift·1 is factored too (UDUᵀ). The factor is a congruence of M − shift·1
-    (Featherstone's LTDL), so by Sylvester's law of inertia every pivot is positive exactly
-    when shift < λmin(M). Returns whether every pivot is positive.
+    Pᵀ IA_0 P − shift·1 is factored too (UDUᵀ), and so is each free joint's (`_factor_free`).
+    The factor is a congruence of M − shift·1 (Featherstone's LTDL), so by Sylvester's law of
+    inertia every pivot is positive exactly when shift < λmin(M). Returns whether every pivot
+    is positive.
     """
     n = index.shape[0]
     for i in range(0 if floating else 1, n):
         block[i, 1] = block[i, 0]
     scratch = np.empty((3, 3))
+    passed = np.empty((6, 6))
     ok = True
     for i in range(n - 1, 0, -1):
         kind = index[i, 1]
+        j = index[i, 0]
+        if kind >= 4:  # IA_i stays in block[i, 1] for the articulated pass
+            ok = _factor_free(kind, block[i, 1], rot[i], shift, root[i], passed) and ok
+            scal[i, 0] = 1.0
+            if j > 0 or floating:
+                add_shift_congruence(block[j, 1], passed, vec[i, _REACH], scratch)
+            continue
         e = vec[i, _AXIS]
         k = 3 if kind == 3 else 0
         art = block[i, 1]
@@ -327,7 +437,6 @@ def _factor(index, floating, rot, vec, block, six, scal, root, shift):
         pivot = _p_dot(kind, e, u) - shift
         scal[i, 0] = pivot
         ok = ok and pivot > 0.0
-        j = index[i, 0]
         if j > 0 or floating:
             for a in range(6):
                 for b in range(6):
@@ -339,9 +448,9 @@ def _factor(index, floating, rot, vec, block, six, scal, root, shift):
         _root_system(rot[0], block[0, 1], columns, system)
         for k in range(6):
             system[k, k] -= shift
-        _udut6(system, root)
+        _udut6(system, root[0])
         for k in range(6):
-            ok = ok and root[6, k] > 0.0
+            ok = ok and root[0, 6, k] > 0.0
     return ok
 
 
@@ -377,15 +486,39 @@ def _velocity_terms(v, index, geometry, floating, rot, vec, six):
         cross3(vec[0, _OMEGA], t2, t1)
         for a in range(3):
             six[0, _C, 3 + a] = t1[a]
+    rel_w = np.empty(3)
+    rel_v = np.empty(3)
     for i in range(1, n):
         j, kind = index[i, 0], index[i, 1]
-        qd = v[index[i, 3]]
         w0 = vec[j, _OMEGA]
-        e = vec[i, _AXIS]
         cross3(w0, vec[i, _REACH], t1)
         cross3(w0, t1, t2)  # ω_j × (ω_j × r)
-        cross3(w0, e, t1)  # ω_j × e_i
         c = six[i, _C]
+        if kind >= 4:
+            # relative twist P v: ω_rel = R ω_l, v_rel = R v_l (ball: 0); c = [ω_j × ω_rel;
+            # ω_j × (ω_j × r) + (ω_j + ω_i) × v_rel] (d/dt of R x is ω_i × R x + R ẋ)
+            k, r_i = index[i, 3], rot[i]
+            kw = k + 3 if kind == 4 else k
+            for a in range(3):
+                rel_v[a] = (
+                    r_i[a, 0] * v[k] + r_i[a, 1] * v[k + 1] + r_i[a, 2] * v[k + 2]
+                    if kind == 4
+                    else 0.0
+                )
+                rel_w[a] = r_i[a, 0] * v[kw] + r_i[a, 1] * v[kw + 1] + r_i[a, 2] * v[kw + 2]
+                vec[i, _OMEGA, a] = w0[a] + rel_w[a]
+            cross3(w0, rel_w, t1)
+            for a in range(3):
+                c[a] = t1[a]
+                c[3 + a] = t2[a]
+                local[a] = w0[a] + vec[i, _OMEGA, a]
+            cross3(local, rel_v, t1)
+            for a in range(3):
+                c[3 + a] += t1[a]
+            continue
+        qd = v[index[i, 3]]
+        e = vec[i, _AXIS]
+        cross3(w0, e, t1)  # ω_j × e_i
         for a in range(3):
             c[3 + a] = t2[a]
             if kind == 3:
@@ -419,8 +552,73 @@ def _velocity_terms(v, index, geometry, floating, rot, vec, six):
 
 
 @njit(cache=True, error_model="numpy")
+def _free_bias_up(i, kind, passes, tau, moving, index, rot, vec, block, six, root):
+    """A free or ball joint's body in `_articulated_pass` from the tips: u, and its parent's share.
+
+    Keeps u = τ_i − Pᵀ pA_i in its U row; passes pA + IA (c + P z), z = S⁻¹ (u − Pᵀ IA c).
+    """
+    load = np.empty(6)
+    wrench = np.empty(6)
+    z = np.empty(6)
+    k, width = index[i, 3], _width(kind)
+    u6 = six[i, _U]
+    _free_load(kind, rot[i], six[i, _WRENCH], load)
+    for a in range(width):
+        u6[a] = tau[k + a] - load[a]
+    if not passes:
+        return
+    art = block[i, 1]
+    for a in range(6):  # IA c, then u − Pᵀ IA c
+        acc = 0.0
+        if moving:
+            for b in range(6):
+                acc += art[a, b] * six[i, _C, b]
+        wrench[a] = acc
+    _free_load(kind, rot[i], wrench, load)
+    for a in range(width):
+        load[a] = u6[a] - load[a]
+    _solve6(root[i], load, z, width)
+    for a in range(6):  # c + P z
+        wrench[a] = six[i, _C, a] if moving else 0.0
+    _add_free_twist(kind, rot[i], z, 0, wrench)
+    for a in range(6):
+        acc = six[i, _WRENCH, a]
+        for b in range(6):
+            acc += art[a, b] * wrench[b]
+        load[a] = acc
+    _add_shifted_wrench(six[index[i, 0], _WRENCH], load, vec[i, _REACH])
+
+
+@njit(cache=True, error_model="numpy")
+def _free_acceleration(i, kind, index, rot, block, six, root, rate, out):
+    """A free or ball joint's q̈ = S⁻¹ (u − Pᵀ IA ṫ) from the root, and its body's ṫ += P q̈."""
+    load = np.empty(6)
+    wrench = np.empty(6)
+    z = np.empty(6)
+    art, width = block[i, 1], _width(kind)
+    for a in range(6):  # IA ṫ
+        acc = 0.0
+        for b in range(6):
+            acc += art[a, b] * rate[b]
+        wrench[a] = acc
+    _free_load(kind, rot[i], wrench, load)
+    for a in range(width):
+        load[a] = six[i, _U, a] - load[a]
+    k = index[i, 3]
+    _solve6(root[i], load, z, width)
+    for a in range(width):
+        out[k + a] = z[a]
+    _add_free_twist(kind, rot[i], z, 0, rate)
+
+
+@njit(cache=True, error_model="numpy")
 def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, six, scal, root, out):
-    """q̈ = M⁻¹ (τ − C q̇ + g) on the factor: bias wrenches from the tips, q̈ from the root."""
+    """q̈ = M⁻¹ (τ − C q̇ + g) on the factor: bias wrenches from the tips, q̈ from the root.
+
+    A free joint's body keeps u = τ_i − Pᵀ pA_i (in its U row) and passes
+    pA + IA (c + P z), z = S⁻¹ (u − Pᵀ IA c); from the root its q̈ is S⁻¹ (u − Pᵀ IA ṫ)
+    with ṫ the twist rate its parent moves it by.
+    """
     n = index.shape[0]
     wrench = np.empty(6)
     for i in range(n):
@@ -428,9 +626,14 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
             six[i, _WRENCH, a] = six[i, _B, a] if moving else 0.0
     for i in range(n - 1, 0, -1):
         kind = index[i, 1]
+        j = index[i, 0]
+        if kind >= 4:
+            _free_bias_up(
+                i, kind, j > 0 or floating, tau, moving, index, rot, vec, block, six, root
+            )
+            continue
         u = tau[index[i, 3]] - _p_dot(kind, vec[i, _AXIS], six[i, _WRENCH])
         scal[i, 1] = u
-        j = index[i, 0]
         if j > 0 or floating:
             scale = u / scal[i, 0]
             for a in range(6):
@@ -463,7 +666,7 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
                 acc -= columns[r, a] * wrench[r]
             rhs[a] = acc
         accel = np.empty(6)
-        _solve6(root, rhs, accel)
+        _solve6(root[0], rhs, accel)
         for a in range(6):
             out[k + a] = accel[a]
             for b in range(6):
@@ -475,6 +678,9 @@ def _articulated_pass(tau, gravity, moving, floating, index, rot, vec, block, si
         if moving:
             for a in range(6):
                 rate[a] += six[i, _C, a]
+        if kind >= 4:
+            _free_acceleration(i, kind, index, rot, block, six, root, rate, out)
+            continue
         dot = 0.0
         for a in range(6):
             dot += six[i, _U, a] * rate[a]
@@ -507,11 +713,14 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
         j, kind = index[i, 0], index[i, 1]
         rate = six[i, _RATE]
         _shift_rate(six[j, _RATE], vec[i, _REACH], rate)
-        x = acc[index[i, 3]]
-        kk = 3 if kind == 3 else 0
-        e = vec[i, _AXIS]
-        for a in range(3):
-            rate[kk + a] += e[a] * x
+        if kind >= 4:
+            _add_free_twist(kind, rot[i], acc, index[i, 3], rate)
+        else:
+            x = acc[index[i, 3]]
+            kk = 3 if kind == 3 else 0
+            e = vec[i, _AXIS]
+            for a in range(3):
+                rate[kk + a] += e[a] * x
         if moving:
             for a in range(6):
                 rate[a] += six[i, _C, a]
@@ -523,8 +732,14 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
             for b in range(6):
                 s += m[a, b] * rate[b]
             six[i, _WRENCH, a] = s
+    load = np.empty(6)
     for i in range(n - 1, 0, -1):
-        out[index[i, 3]] = _p_dot(index[i, 1], vec[i, _AXIS], six[i, _WRENCH])
+        if index[i, 1] >= 4:
+            _free_load(index[i, 1], rot[i], six[i, _WRENCH], load)
+            for a in range(_width(index[i, 1])):
+                out[index[i, 3] + a] = load[a]
+        else:
+            out[index[i, 3]] = _p_dot(index[i, 1], vec[i, _AXIS], six[i, _WRENCH])
         j = index[i, 0]
         if j > 0 or floating:
             _add_shifted_wrench(six[j, _WRENCH], six[i, _WRENCH], vec[i, _REACH])
@@ -535,6 +750,25 @@ def _newton_euler_pass(acc, gravity, moving, floating, index, rot, vec, block, s
             for r in range(6):
                 s += columns[r, a] * six[0, _WRENCH, r]
             out[k + a] = s
+
+
+@njit(cache=True)  # not inlined: the 1-DoF loops stay small
+def _free_diagonal(c, r, k, out, kind=4):
+    """A free body's diagonal entries: the subtree's mass m (linear), R_aᵀ I_O R_a (angular).
+
+    A ball joint has the three angular ones only.
+    """
+    angular = k + 3 if kind == 4 else k
+    for a in range(3):
+        if kind == 4:
+            out[k + a] = c[0]
+        x, y, z = r[0, a], r[1, a], r[2, a]
+        out[angular + a] = (
+            c[4] * x * x
+            + c[5] * y * y
+            + c[6] * z * z
+            + 2.0 * (c[7] * x * y + c[8] * x * z + c[9] * y * z)
+        )
 
 
 # -- entry points: one compiled call per operation ----------------------------------------
@@ -579,7 +813,9 @@ def gim_diagonal(q, index, geometry, floating, rot, vec, comp, out):
     for i in range(n - 1, 0, -1):
         c = comp[i]
         e0, e1, e2 = vec[i, _AXIS, 0], vec[i, _AXIS, 1], vec[i, _AXIS, 2]
-        if index[i, 1] == 3:
+        if index[i, 1] >= 4:
+            _free_diagonal(c, rot[i], index[i, 3], out, index[i, 1])
+        elif index[i, 1] == 3:
             out[index[i, 3]] = c[0]
         else:
             out[index[i, 3]] = (
@@ -606,18 +842,7 @@ def gim_diagonal(q, index, geometry, floating, rot, vec, comp, out):
             p[8] += c[8] - m * r0 * r2 - r0 * h2 - h0 * r2
             p[9] += c[9] - m * r1 * r2 - r1 * h2 - h1 * r2
     if floating:
-        k = index[0, 3]
-        c = comp[0]
-        r = rot[0]
-        for a in range(3):
-            out[k + a] = c[0]
-            x, y, z = r[0, a], r[1, a], r[2, a]
-            out[k + 3 + a] = (
-                c[4] * x * x
-                + c[5] * y * y
-                + c[6] * z * z
-                + 2.0 * (c[7] * x * y + c[8] * x * z + c[9] * y * z)
-            )
+        _free_diagonal(comp[0], rot[0], index[0, 3], out)
     largest, smallest = out[0], out[0]
     for k in range(out.shape[0]):
         largest = max(largest, out[k])

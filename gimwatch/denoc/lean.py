@@ -20,7 +20,7 @@ from gimwatch.denoc import fused
 from gimwatch.denoc.tree import BodyTree
 from gimwatch.errors import ConditioningError
 
-__all__ = ["LeanModel"]
+__all__ = ["LeanModel", "LeanState"]
 
 _ZERO_GRAVITY = np.zeros(3)
 
@@ -74,7 +74,7 @@ class LeanModel:
         self._six = np.zeros((n, 5, 6))
         self._block = np.zeros((n, 2, 6, 6))
         self._scal = np.ones((n, 2))
-        self._root = np.ones((7, 6))
+        self._root = np.ones((n, 7, 6))  # 6×6 factors: the floating root, free joints
         self._diag = np.empty(self.nv)
         self._comp = np.zeros((n, 10))
         self._configured = False
@@ -123,6 +123,29 @@ class LeanModel:
         self._configured = bool(ok)
         if not ok:
             raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
+
+    def factor_pivots(self, q: np.ndarray) -> np.ndarray:
+        """The UDUᵀ pivots of M(q) (elimination from the tips), O(n); configures at q.
+
+        One per 1-DoF joint; six for the floating root and each free joint, three for each
+        ball joint (the UDUᵀ pivots of its 6×6 or 3×3 articulated system). A pivot ≤ 0
+        (M singular) is returned, not raised: the caller names it.
+        """
+        self._configured = bool(
+            fused.configure(q, self._index, self._geometry, self.floating, *self._buffers())
+        )
+        out = np.empty(self.nv)
+        kind, first = self._index[:, 1], self._index[:, 3]
+        single = np.flatnonzero(kind[1:] < 4) + 1
+        out[first[single]] = self._scal[single, 0]
+        several = list(np.flatnonzero(kind[1:] >= 4) + 1) + ([0] if self.floating else [])
+        for i in several:
+            width = 3 if kind[i] == 5 else 6
+            out[first[i] : first[i] + width] = self._root[i, 6, :width]
+        return out
+
+    def _buffers(self) -> tuple:
+        return self._rot, self._vec, self._block, self._six, self._scal, self._root
 
     def compiled_operator_arguments(self) -> tuple:
         """The buffers the compiled products read after `configure`.
@@ -249,3 +272,51 @@ class LeanModel:
         )
         self._configured = False  # the factor is not recomputed by inverse dynamics
         return out
+
+
+class LeanState:
+    """M(q)'s O(n) operators at one configuration, on a [`LeanModel`][gimwatch.denoc.LeanModel].
+
+    What [`ConfigurationState`][gimwatch.denoc.ConfigurationState] gives a fixed-base tree
+    of 1-DoF joints — ``diagonal``, ``matvec``, ``solve``, ``pivots`` — for any tree the
+    compiled recursions read: a floating base, free joints on any body, several trees.
+    Vectors are in the order ``order`` gives (internal coordinate k is the model's
+    coordinate ``order[k]``), so that it stands in for the linear-time state.
+    The model's buffers hold this configuration: one state per LeanModel at a time.
+
+    Raises:
+        ConditioningError: (``solve``) M(q) is singular.
+    """
+
+    def __init__(self, model: LeanModel, q: np.ndarray, order: np.ndarray) -> None:
+        self.model, self.q, self._order = model, np.ascontiguousarray(q, dtype=float), order
+        self._pivots = model.factor_pivots(self.q)
+
+    def _public(self, x: np.ndarray) -> np.ndarray:
+        out = np.empty(self.model.nv)
+        out[self._order] = x
+        return out
+
+    def diagonal(self) -> np.ndarray:
+        """Diag M(q), O(n)."""
+        return self.model.gim_diagonal(self.q)[self._order]
+
+    @property
+    def centres_of_mass(self) -> np.ndarray:
+        """World positions of the bodies' centres of mass (N, 3), m (row 0: the root's)."""
+        vec = self.model._vec
+        return vec[:, fused.ORIGIN_ROW] + vec[:, fused.COM_OFFSET_ROW]
+
+    def pivots(self) -> np.ndarray:
+        """The UDUᵀ pivots (elimination from the tips), O(n)."""
+        return self._pivots[self._order]
+
+    def matvec(self, x: np.ndarray) -> np.ndarray:
+        """M(q) x, O(n)."""
+        return self.model.gim_product(self._public(x))[self._order]
+
+    def solve(self, y: np.ndarray) -> np.ndarray:
+        """M(q)⁻¹ y, O(n)."""
+        if not self.model._configured:
+            raise ConditioningError("M(q) is singular: an articulated-body pivot is not positive")
+        return self.model.gim_solve(self._public(y))[self._order]

@@ -16,9 +16,9 @@ import numpy.typing as npt
 
 from gimwatch.denoc import recursions
 from gimwatch.denoc.chain import chain_body_tree
-from gimwatch.denoc.lean import LeanModel
+from gimwatch.denoc.lean import LeanModel, LeanState
 from gimwatch.denoc.linear import ConfigurationState, LinearTimeModel
-from gimwatch.denoc.tree import FREE_FLYER_NAME, BodyTree, read_body_tree
+from gimwatch.denoc.tree import BALL_KIND, FREE_FLYER_NAME, FREE_KIND, BodyTree, read_body_tree
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.model.chains import ChainSpec
 
@@ -64,25 +64,52 @@ class DenocModel:
                 hint=f"expected the names {sorted(moving)}",
             )
         body_of = {name: i for i, name in enumerate(tree.joint_names) if name}
+        self._body_of = body_of
         self.joint_names: tuple[str, ...] = order
         self._q_index = np.zeros(tree.size, dtype=np.intp)
         self._root_q = 0
         v_of_body = np.zeros(tree.size, dtype=np.intp)
-        root_v = 0
         nq = nv = 0
         for name in order:
             body = body_of[name]
-            if body == 0:
-                self._root_q, root_v = nq, nv
+            if body == 0 or tree.kind[body] == FREE_KIND:  # six DoF: q 7, v 6
+                self._q_index[body], v_of_body[body] = nq, nv
                 nq, nv = nq + 7, nv + 6
+                continue
+            if tree.kind[body] == BALL_KIND:  # three rotations: q 4, v 3
+                self._q_index[body], v_of_body[body] = nq, nv
+                nq, nv = nq + 4, nv + 3
                 continue
             self._q_index[body], v_of_body[body] = nq, nv
             nq += 2 if tree.kind[body] == 2 else 1
             nv += 1
+        self._root_q = int(self._q_index[0])
         self.nq, self.nv = nq, nv
-        root = np.arange(root_v, root_v + 6) if tree.floating else np.zeros(0, np.intp)
+        self._v_of_body = v_of_body
+        #: the free joints below the root (several free bodies, several trees)
+        self.free_joints = bool(np.any(tree.kind >= FREE_KIND))
+        widths = np.where(tree.kind == FREE_KIND, 6, np.where(tree.kind == BALL_KIND, 3, 1))
+        self._widths = widths
+        widths[0] = 6 if tree.floating else 0
         #: internal coordinate k is public coordinate _v_index[k]
-        self._v_index = np.concatenate([root, v_of_body[1:]]).astype(np.intp)
+        self._v_index = np.concatenate(
+            [v_of_body[i] + np.arange(widths[i]) for i in range(tree.size)]
+        ).astype(np.intp)
+
+    @property
+    def dof_names(self) -> tuple[str, ...]:
+        """One name per velocity coordinate, public order (``name[k]`` for a joint of six)."""
+        if not hasattr(self, "_dof_names"):
+            names = [""] * self.nv
+            for name in self.joint_names:
+                body = self._body_of[name]
+                start, width = int(self._v_of_body[body]), int(self._widths[body])
+                if width > 1:
+                    names[start : start + width] = [f"{name}[{k}]" for k in range(width)]
+                else:
+                    names[start] = name
+            self._dof_names = tuple(names)
+        return self._dof_names
 
     @classmethod
     def from_urdf(
@@ -114,8 +141,8 @@ class DenocModel:
 
     @property
     def linear(self) -> LinearTimeModel | None:
-        """The compiled O(n) model (None with a floating base)."""
-        if self.tree.floating:
+        """The compiled O(n) model (None with a floating base or free joints)."""
+        if self.tree.floating or self.free_joints:
             return None
         if not hasattr(self, "_linear"):
             self._linear = LinearTimeModel(self.tree)
@@ -128,25 +155,21 @@ class DenocModel:
         [`LeanModel`][gimwatch.denoc.LeanModel]). Made on first use and kept.
         """
         if not hasattr(self, "_lean"):
-            q_index = self._q_index.copy()
-            q_index[0] = self._root_q
-            start = 6 if self.tree.floating else 0
-            v_index = np.zeros(self.tree.size, dtype=np.intp)
-            v_index[1:] = self._v_index[start:]
-            v_index[0] = self._v_index[0] if self.tree.floating else 0
-            self._lean = LeanModel(self.tree, q_index, v_index, self.nq, self.nv)
+            self._lean = LeanModel(self.tree, self._q_index, self._v_of_body, self.nq, self.nv)
         return self._lean
 
-    def state(self, q: npt.ArrayLike) -> ConfigurationState:
-        """The compiled model's state at ``q`` (fixed base only), for repeated O(n) products.
+    def state(self, q: npt.ArrayLike) -> ConfigurationState | LeanState:
+        """The compiled model's state at ``q``, for repeated O(n) products.
 
-        Its vectors are in internal (body) order: use
-        [`to_internal`][gimwatch.denoc.DenocModel.to_internal] and
+        A fixed-base tree of 1-DoF joints gets the linear-time model's state (one angle per
+        body); a floating base or free joints a [`LeanState`][gimwatch.denoc.LeanState] on
+        [`lean`][gimwatch.denoc.DenocModel.lean]. Either state's vectors are in internal
+        (body) order: use [`to_internal`][gimwatch.denoc.DenocModel.to_internal] and
         [`to_public`][gimwatch.denoc.DenocModel.to_public] to translate.
         """
-        if self.linear is None:
-            raise InputError("the model", "fixed-base for the O(n) state", "a floating base")
         q = _vector("q", q, self.nq)
+        if self.linear is None:
+            return LeanState(self.lean(), q, self._v_index)
         first = q[self._q_index[1:]]
         second = q[np.minimum(self._q_index[1:] + 1, self.nq - 1)]
         # continuous joints hold (cos θ, sin θ); the compiled kernels take θ
@@ -166,13 +189,16 @@ class DenocModel:
     def energy(
         self, q: npt.ArrayLike, v: npt.ArrayLike, *, gravity: npt.ArrayLike = _GRAVITY
     ) -> tuple[float, float]:
-        """(kinetic ½ vᵀ M v, gravity potential -Σ m_i g·c_i) in J; fixed base only, O(n)."""
+        """(kinetic ½ vᵀ M v, gravity potential -Σ m_i g·c_i) in J, O(n), any tree."""
         state = self.state(q)
         velocity = self.to_internal("v", v)
         kinetic = 0.5 * float(velocity @ state.matvec(velocity))
-        centres = state.centres_of_mass
-        potential = -float(self.tree.mass[1:] @ (centres @ _vector("gravity", gravity, 3)))
-        return kinetic, potential
+        g = _vector("gravity", gravity, 3)
+        if self.linear is not None:  # the moving bodies' centres, body 1 on
+            return kinetic, -float(self.tree.mass[1:] @ (state.centres_of_mass @ g))
+        first = 0 if self.tree.floating else 1  # a fixed root (the world) does not move
+        centres = state.centres_of_mass[first:]
+        return kinetic, -float(self.tree.mass[first:] @ (centres @ g))
 
     def permutation_to(self, order: Sequence[str]) -> np.ndarray:
         """Index array ``perm`` (nv,) with ``x_in_order = x[perm]`` for velocity-space vectors.
@@ -195,7 +221,14 @@ class DenocModel:
         sin = np.where(kind == 1, np.sin(first), np.where(kind == 2, second, 0.0))
         displacement = np.where(kind == 3, first, 0.0)
         root = q[self._root_q : self._root_q + 7] if tree.floating else None
-        return recursions.kinematics(tree, cos, sin, displacement, root)
+        free = None
+        if self.free_joints:
+            free = np.zeros((tree.size, 7))
+            for i in np.flatnonzero(kind == FREE_KIND):
+                free[i] = q[self._q_index[i] : self._q_index[i] + 7]
+            for i in np.flatnonzero(kind == BALL_KIND):
+                free[i, 3:] = q[self._q_index[i] : self._q_index[i] + 4]
+        return recursions.kinematics(tree, cos, sin, displacement, root, free)
 
     # -- the GIM ----------------------------------------------------------------------
     def gim(self, q: npt.ArrayLike) -> np.ndarray:
@@ -276,14 +309,8 @@ class DenocModel:
             )
 
     def _coordinate_name(self, k: int) -> str:
-        """Joint name of public velocity coordinate k (``root_joint[i]`` for the free-flyer)."""
-        offset = 0
-        for name in self.joint_names:
-            width = 6 if name == FREE_FLYER_NAME and self.tree.floating else 1
-            if k < offset + width:
-                return f"{name}[{k - offset}]" if width > 1 else name
-            offset += width
-        raise IndexError(k)
+        """Joint name of public velocity coordinate k (``name[i]`` for a joint of six)."""
+        return self.dof_names[k]
 
     def forward_dynamics_pivots(self, q: npt.ArrayLike) -> np.ndarray:
         """The backward (UDUᵀ) pivots d_i = p_iᵀ M̂_i p_i of the forward-dynamics recursion.
@@ -297,6 +324,8 @@ class DenocModel:
 
     def _internal_pivots(self, q: npt.ArrayLike) -> np.ndarray:
         if self.linear is not None:
+            return self.state(q).pivots()
+        if self.free_joints:  # the compiled factor: six UDUᵀ pivots per free joint
             return self.state(q).pivots()
         with np.errstate(divide="ignore", invalid="ignore"):
             _, pivots = recursions.forward_dynamics(

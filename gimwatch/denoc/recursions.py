@@ -8,7 +8,8 @@ Notation of Shah & Saha (2013), Sec. 4, and Saha's DeNOC: body i has the twist
 depth (one numpy call serves every body of a depth), so the only Python loop runs over depths.
 
 Internal coordinates: the root's 6 free-flyer velocities (Pinocchio's order: local linear,
-local angular) when floating, then one coordinate per body 1..N-1.
+local angular) when floating, then per body 1..N-1 one coordinate, or six for a free joint
+(the same local linear and angular velocities of that body, relative to its parent).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from gimwatch.denoc.spatial import (
     shift_twist,
     shift_wrench,
 )
-from gimwatch.denoc.tree import BodyTree
+from gimwatch.denoc.tree import BALL_KIND, FREE_KIND, BodyTree
 
 __all__ = [
     "Kinematics",
@@ -84,6 +85,7 @@ def kinematics(
     sin: np.ndarray,
     displacement: np.ndarray,
     root_pose: np.ndarray | None,
+    free_pose: np.ndarray | None = None,
 ) -> Kinematics:
     """Poses, axes, p_i and M_i of all bodies (positions: one batched step per depth).
 
@@ -93,6 +95,8 @@ def kinematics(
         sin: sin q_i (N,), 0 elsewhere.
         displacement: q_i of prismatic joints (N,), m, 0 elsewhere.
         root_pose: Free-flyer (x, y, z, qx, qy, qz, qw), or None for a fixed base.
+        free_pose: (N, 7): each free joint's (x, y, z, qx, qy, qz, qw) in its row, each ball
+            joint's (0, 0, 0, qx, qy, qz, qw) (None: neither).
     """
     n = tree.size
     revolute = (tree.kind == 1) | (tree.kind == 2)
@@ -101,6 +105,9 @@ def kinematics(
     joint_translation = tree.placement_translation + np.einsum(
         "kij,kj->ki", tree.placement_rotation, tree.axis * displacement[:, None]
     )
+    for i in np.flatnonzero(tree.kind >= FREE_KIND):  # placement, then the free motion
+        joint_rotation[i] = tree.placement_rotation[i] @ _quaternion_matrix(*free_pose[i, 3:7])
+        joint_translation[i] += tree.placement_rotation[i] @ free_pose[i, :3]  # ball: 0
     rotation = np.empty((n, 3, 3))
     origin = np.zeros((n, 3))
     if root_pose is None:
@@ -138,12 +145,32 @@ def composite_mass_matrices(tree: BodyTree, kin: Kinematics) -> np.ndarray:
     return composite
 
 
+def _free_columns(rotation: np.ndarray) -> np.ndarray:
+    """P = [[0, R], [R, 0]] (6, 6): local (v, ω) of a free joint to the world twist [ω; v_O]."""
+    columns = np.zeros((6, 6))
+    columns[3:, :3] = rotation
+    columns[:3, 3:] = rotation
+    return columns
+
+
 def _columns(tree: BodyTree, kin: Kinematics) -> tuple[np.ndarray, np.ndarray]:
-    """The motion-propagation columns (nv, 6) and the body each belongs to (nv,)."""
-    bodies = np.arange(1, tree.size)
+    """The motion-propagation columns (nv, 6) and the body each belongs to (nv,).
+
+    One per 1-DoF body, six for the floating root and each free joint, three for each ball
+    joint, in body order.
+    """
+    kind = tree.kind[1:]
+    widths = np.where(kind == FREE_KIND, 6, np.where(kind == BALL_KIND, 3, 1))
+    body = np.repeat(np.arange(1, tree.size), widths)
+    columns = kin.p[body]
+    starts = np.cumsum(widths) - widths
+    for i in np.flatnonzero(kind == FREE_KIND):
+        columns[starts[i] : starts[i] + 6] = _free_columns(kin.rotation[i + 1]).T
+    for i in np.flatnonzero(kind == BALL_KIND):  # [R; 0]: the free joint's angular three
+        columns[starts[i] : starts[i] + 3] = _free_columns(kin.rotation[i + 1]).T[3:]
     if not tree.floating:
-        return kin.p[1:], bodies
-    return np.vstack([kin.p_root.T, kin.p[1:]]), np.concatenate([np.zeros(6, np.intp), bodies])
+        return columns, body
+    return np.vstack([kin.p_root.T, columns]), np.concatenate([np.zeros(6, np.intp), body])
 
 
 def gim_diagonal(tree: BodyTree, kin: Kinematics) -> np.ndarray:
@@ -239,6 +266,7 @@ def inverse_dynamics(
     wrenches ``w_i = M_i ṫ_i + b_i``; the wrenches are summed tips to root with ``A_{j,i}ᵀ``
     and ``τ_i = p_iᵀ w̃_i``.
     """
+    _one_dof_only(tree)
     motion = _motion(tree, kin, qd, root_v)
     rate = np.zeros((tree.size, 6))
     rate[0] = _root_rate(gravity)
@@ -254,6 +282,12 @@ def inverse_dynamics(
     if tree.floating:
         tau = np.concatenate([kin.p_root.T @ wrench[0], tau])
     return tau
+
+
+def _one_dof_only(tree: BodyTree) -> None:
+    """The NumPy dynamics below know 1-DoF joints only; free joints run compiled (`.fused`)."""
+    if np.any(tree.kind >= FREE_KIND):
+        raise NotImplementedError("free and ball joints: use the compiled recursions")
 
 
 def udut_pivots_small(D: np.ndarray) -> np.ndarray:
@@ -284,6 +318,7 @@ def forward_dynamics(
     Returns:
         (q̈ in internal order, or None when ``tau`` is None; the pivots in internal order).
     """
+    _one_dof_only(tree)
     articulated = kin.M.copy()
     dynamic = tau is not None
     if dynamic:

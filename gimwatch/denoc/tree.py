@@ -5,6 +5,11 @@ carried into the parent body's frame), so every body but the root hangs from exa
 1-DoF joint (revolute, continuous or prismatic). The root body is the URDF's root link: fixed
 to the world, or moving on a 6-DoF free-flyer when ``floating``. Bodies are numbered as a
 walk from the root reaches them (children by joint name): a parent comes before its children.
+
+A tree made from arrays (`body_tree`, as `gimwatch.metrics.denoc_robot` does from a loaded
+robot) may also give any body a free joint (`FREE_KIND`: six DoF relative to its parent,
+Pinocchio's free-flyer) or a ball joint (`BALL_KIND`), and hang several trees from a fixed
+root (the world): many free bodies, or robots side by side.
 """
 
 from __future__ import annotations
@@ -19,10 +24,24 @@ import numpy as np
 from gimwatch.errors import URDFError
 from gimwatch.model.urdf_text import check_urdf
 
-__all__ = ["FREE_FLYER_NAME", "JOINT_KINDS", "BodyTree", "read_body_tree"]
+__all__ = [
+    "BALL_KIND",
+    "FREE_FLYER_NAME",
+    "FREE_KIND",
+    "JOINT_KINDS",
+    "BodyTree",
+    "body_tree",
+    "read_body_tree",
+]
 
 #: Joint types DeNOC reads, and the code each moving one gets in `BodyTree.kind`.
 JOINT_KINDS = {"revolute": 1, "continuous": 2, "prismatic": 3}
+#: `BodyTree.kind` of a free joint: q = (x, y, z, qx, qy, qz, qw) of the body in the joint
+#: frame, v = (linear, angular velocity) in the body's frame (Pinocchio's free-flyer).
+FREE_KIND = 4
+#: `BodyTree.kind` of a ball joint: q = (qx, qy, qz, qw), v = the angular velocity in the
+#: body's frame (Pinocchio's spherical joint, MuJoCo's ``ball``).
+BALL_KIND = 5
 _SUPPORTED = (*JOINT_KINDS, "fixed")
 #: Name of the 6-DoF root joint, as in Pinocchio's free-flyer models.
 FREE_FLYER_NAME = "root_joint"
@@ -37,10 +56,11 @@ class BodyTree:
         floating: Whether the root body moves on a free-flyer.
         joint_names: Name of the joint above each body (``root_joint`` or ``""`` for the root).
         parent: Parent body of each body, -1 for the root.
-        kind: Joint code of each body (0 root, 1 revolute, 2 continuous, 3 prismatic).
+        kind: Joint code of each body (0 root, 1 revolute, 2 continuous, 3 prismatic, 4 free,
+            5 ball).
         placement_rotation: Joint frame in the parent body's frame at q = 0 (N, 3, 3).
         placement_translation: Joint origin in the parent body's frame (N, 3), m.
-        axis: Unit joint axis in the body's frame (N, 3).
+        axis: Unit joint axis in the body's frame (N, 3); zero for the root and free joints.
         mass: Body masses (N,), kg.
         com: Centres of mass in the body frame (N, 3), m.
         inertia: Inertia tensors about the centre of mass, body axes (N, 3, 3), kg·m².
@@ -183,23 +203,58 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
             parts.append([])
             stack.append((joint.child, len(parent) - 1, np.eye(4)))
     merged = [_merge(p) for p in parts]
+    return body_tree(
+        source=source,
+        floating=floating,
+        joint_names=names,
+        parent=parent,
+        kind=kind,
+        placement_rotation=rotation,
+        placement_translation=translation,
+        axis=axis,
+        mass=[m for m, _, _ in merged],
+        com=[c for _, c, _ in merged],
+        inertia=[i for _, _, i in merged],
+    )
+
+
+def body_tree(
+    *,
+    source: str,
+    floating: bool,
+    joint_names,
+    parent,
+    kind,
+    placement_rotation,
+    placement_translation,
+    axis,
+    mass,
+    com,
+    inertia,
+) -> BodyTree:
+    """A [`BodyTree`][gimwatch.denoc.BodyTree] from per-body arrays, parents numbered first.
+
+    Fields as in `BodyTree` (``levels`` is computed). Body 0 is the root; with ``floating``
+    False it is the world (its inertia never enters M) and any of its children may be the
+    root of a tree of its own, on a free joint (`FREE_KIND`) or not.
+    """
     parent_arr = np.array(parent, dtype=np.intp)
-    depth = np.zeros(len(parent), dtype=np.intp)
-    for i in range(1, len(parent)):  # parents are numbered before their children
-        depth[i] = depth[parent[i]] + 1
+    depth = np.zeros(len(parent_arr), dtype=np.intp)
+    for i in range(1, len(parent_arr)):  # parents are numbered before their children
+        depth[i] = depth[parent_arr[i]] + 1
     order = np.argsort(depth, kind="stable")
     levels = tuple(np.split(order, np.flatnonzero(np.diff(depth[order])) + 1)[1:])
     return BodyTree(
         source=source,
         floating=floating,
-        joint_names=tuple(names),
+        joint_names=tuple(joint_names),
         parent=parent_arr,
         kind=np.array(kind, dtype=np.intp),
-        placement_rotation=np.array(rotation),
-        placement_translation=np.array(translation),
-        axis=np.array(axis),
-        mass=np.array([m for m, _, _ in merged]),
-        com=np.array([c for _, c, _ in merged]),
-        inertia=np.array([i for _, _, i in merged]),
+        placement_rotation=np.array(placement_rotation, dtype=float).reshape(-1, 3, 3),
+        placement_translation=np.array(placement_translation, dtype=float).reshape(-1, 3),
+        axis=np.array(axis, dtype=float).reshape(-1, 3),
+        mass=np.array(mass, dtype=float),
+        com=np.array(com, dtype=float).reshape(-1, 3),
+        inertia=np.array(inertia, dtype=float).reshape(-1, 3, 3),
         levels=levels,
     )

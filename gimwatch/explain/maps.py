@@ -27,7 +27,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
-from gimwatch.metrics.analyze import choose_path
+from gimwatch.metrics.analyze import choose_path, robot_for_path
+from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.metrics.linear_analysis import LINEAR_METRICS
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
@@ -89,9 +90,14 @@ def _linear_model(spec: str):
     chain = parse_chain_spec(spec)
     if chain is not None:
         return DenocModel.from_chain(chain), chain.name
-    robot = load_robot(spec)
-    model = DenocModel.from_urdf(robot.urdf_xml, source=robot.source, joint_order=robot.joint_names)
-    return model, robot.name
+    robot = _file_robot(spec)
+    return denoc_model(robot), robot.name
+
+
+@functools.lru_cache(maxsize=2)
+def _file_robot(spec: str):
+    """A file's robot for the O(n) path: its Pinocchio Model, never a Data (any nv)."""
+    return robot_for_path(spec)
 
 
 @functools.lru_cache(maxsize=2)
@@ -101,12 +107,12 @@ def _lean(spec: str):
 
 def robot_coordinates(spec: str, path: str) -> tuple[str, list[str]]:
     """(robot name, names of the q coordinates in order) on ``path``."""
-    if path == "denoc":
+    if path == "denoc" and parse_chain_spec(spec) is not None:
         model, name = _linear_model(spec)
         return name, list(model.joint_names)
     from gimwatch.output.figures import joint_coordinate_units
 
-    robot = _robot(spec)
+    robot = _robot(spec) if path == "crba" else _file_robot(spec)
     return robot.name, joint_coordinate_units(robot.model)[0]
 
 
@@ -204,10 +210,10 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
     """
     if len(joints) != 2 or joints[0] == joints[1]:
         raise InputError("--joints", "two different joint names", list(joints))
-    if path == "denoc":
+    chain = parse_chain_spec(spec)
+    if path == "denoc" and chain is not None:
         model, name = _linear_model(spec)
         names = list(model.joint_names)
-        chain = parse_chain_spec(spec)
         kinds = chain.joint_types if chain is not None else ("revolute",) * len(names)
         lengths = chain.lengths_m if chain is not None else (1.0,) * len(names)
         index = {n: i for i, n in enumerate(names)}
@@ -217,8 +223,8 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
             for n, k, l in zip(names, kinds, lengths, strict=True)
         }
         neutral = np.zeros(len(names))
-    else:
-        robot = _robot(spec)
+    else:  # the O(n) path reads a file's Model only, never a Data
+        robot = _robot(spec) if path == "crba" else _file_robot(spec)
         model, name, names = robot.model, robot.name, list(robot.joint_names)
         index, units, limits = {}, {}, {}
         for j in range(1, model.njoints):

@@ -2,16 +2,19 @@
 
 The dense path forms M with Pinocchio's CRBA and gives every metric and the whole spectrum;
 the O(n) path (`gimwatch.metrics.linear_analysis`) never forms M nor builds a Pinocchio
-Data, whose memory grows as nv³. `choose_path` picks it: above
-`DATA_NV_LIMIT` coordinates a fixed-base generated chain goes
-the O(n) way, everything else the dense way, unless the caller asks for one.
+Data, whose memory grows as nv³. `choose_path` picks it: above `DATA_NV_LIMIT` (400)
+coordinates a robot goes the O(n) way — a generated chain, a URDF or MJCF file, fixed or
+floating, with ball and free joints on any body and several trees — everything else the dense way,
+unless the caller asks for one.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -29,7 +32,15 @@ from gimwatch.model.robots import (
     random_configurations,
 )
 
-__all__ = ["LINEAR_NV_LIMIT", "PATHS", "Analysis", "analyze", "choose_path", "velocity_units"]
+__all__ = [
+    "LINEAR_NV_LIMIT",
+    "PATHS",
+    "Analysis",
+    "analyze",
+    "choose_path",
+    "robot_for_path",
+    "velocity_units",
+]
 
 #: ``backend`` values: ``auto`` lets `choose_path` decide.
 PATHS = ("auto", "crba", "denoc")
@@ -81,15 +92,49 @@ def velocity_units(model) -> tuple[int, int]:
     return lengths, angles
 
 
-def choose_path(spec: str, *, floating: bool = False, backend: str = "auto") -> str:
-    """``"denoc"`` for the O(n) path, ``"crba"`` for the dense one (see the module docstring)."""
+def choose_path(
+    spec: str,
+    *,
+    floating: bool | None = None,
+    backend: str = "auto",
+    body: str = "",
+    armature: bool = True,
+) -> str:
+    """``"denoc"`` for the O(n) path, ``"crba"`` for the dense one (see the module docstring).
+
+    Under ``auto`` a file or a named robot is loaded (`robot_for_path`: its Pinocchio Model,
+    never a Data) to learn its nv; a generated chain is not.
+    """
     if backend not in PATHS:
         raise InputError("backend", f"one of {', '.join(PATHS)}", backend)
     if backend != "auto":
         return backend
     chain = parse_chain_spec(spec)
-    large = chain is not None and not floating and chain.n > DATA_NV_LIMIT
-    return "denoc" if large else "crba"
+    if chain is not None:
+        return "denoc" if chain.n + 6 * bool(floating) > DATA_NV_LIMIT else "crba"
+    robot = robot_for_path(spec, floating=floating, body=body, armature=armature)
+    return "denoc" if robot.nv > DATA_NV_LIMIT else "crba"
+
+
+def robot_for_path(
+    spec: str, *, floating: bool | None = None, body: str = "", armature: bool = True
+):
+    """`load_robot` without a Data limit (the Model is O(nv)), kept for the next call.
+
+    `choose_path` and the path it chooses read the robot once: the last few loads are
+    kept, keyed by the file's size and modification time as well as the arguments.
+    """
+    try:
+        stat = Path(spec).stat()
+        version = (stat.st_size, stat.st_mtime_ns)
+    except (OSError, ValueError):
+        version = None
+    return _load(str(spec), floating, body, armature, version)
+
+
+@functools.lru_cache(maxsize=4)
+def _load(spec, floating, body, armature, version):
+    return load_robot(spec, floating=floating, body=body, armature=armature)
 
 
 def _configurations(q, random, seed, nq, neutral, draw, robot=None, key="q", spec="") -> list:
@@ -123,17 +168,16 @@ def _linear(spec, q, random, seed, metrics, floating, key, body, armature):
         The analyses, and (coordinates in m, coordinates in rad).
     """
     from gimwatch.denoc import DenocModel
+    from gimwatch.metrics.denoc_robot import denoc_model
     from gimwatch.metrics.linear_analysis import (
         LINEAR_METRICS,
         analyze_linear,
         chain_configurations,
     )
 
-    if floating:
-        raise InputError("floating", "left out on the O(n) path (fixed bases only)", True)
     metrics = LINEAR_METRICS if metrics is None else tuple(metrics)
     chain = parse_chain_spec(spec)
-    if chain is not None:
+    if chain is not None and not floating:
         if chain.n > LINEAR_NV_LIMIT:
             raise InputError("the N of chain:N", f"at most {LINEAR_NV_LIMIT}", chain.n)
         model, name = DenocModel.from_chain(chain), chain.name
@@ -150,15 +194,11 @@ def _linear(spec, q, random, seed, metrics, floating, key, body, armature):
             spec=spec,
         )
     else:
-        robot = load_robot(spec, body=body, armature=armature)
-        if not robot.urdf_xml or np.any(np.asarray(robot.model.armature)):
-            raise InputError(
-                "backend denoc", "a URDF tree of hinges and slides without armature", spec
-            )
-        model = DenocModel.from_urdf(
-            robot.urdf_xml, source=robot.source, joint_order=robot.joint_names
-        )
-        name, units = robot.name, velocity_units(robot.model)
+        robot = robot_for_path(spec, floating=floating, body=body, armature=armature)
+        if robot.nv > LINEAR_NV_LIMIT:
+            raise InputError("the robot's nv", f"at most {LINEAR_NV_LIMIT}", robot.nv)
+        model, name = denoc_model(robot), robot.name
+        units = velocity_units(robot.model)
         qs = _robot_configurations(robot, q, random, seed, key, spec)
     return [analyze_linear(model, x, name=name, metrics=metrics, seed=seed) for x in qs], units
 
@@ -183,7 +223,7 @@ def analyze(
         q: One configuration as a user writes it (a continuous joint by its angle), or None.
         random: Analyse this many random configurations within the joint limits instead.
         seed: Seed of the random configurations (and of Lanczos on the O(n) path).
-        floating: True: a free-flyer base (dense path only); False: fixed; None: the robot's
+        floating: True: a free-flyer base; False: fixed; None: the robot's
             default (`default_floating`: example-robot-data's base for its robots).
         backend: ``auto``, ``crba`` (dense) or ``denoc`` (O(n)); see `choose_path`.
         metrics: On the O(n) path, a subset of its metrics; the dense path computes all.
@@ -196,18 +236,26 @@ def analyze(
     """
     if floating is None:
         floating = parse_chain_spec(spec) is None and default_floating(spec)
-    path = choose_path(spec, floating=floating, backend=backend)
+    path = choose_path(spec, floating=floating, backend=backend, body=body, armature=armature)
     if metrics is not None and path != "denoc":
         raise InputError("metrics", "chosen on the O(n) path (backend denoc)", list(metrics))
     placeholders: tuple[str, ...] = ()
+    chain = parse_chain_spec(spec)
     if path == "denoc":
         results, units = _linear(spec, q, random, seed, metrics, floating, key, body, armature)
+        if chain is None or floating:  # an MJCF file may float its robot itself
+            robot = robot_for_path(spec, floating=floating, body=body, armature=armature)
+            floating = robot.free_base
+            if random is not None:
+                placeholders = placeholder_limit_joints(robot)
     else:
-        robot = load_robot(
-            spec, floating=floating, max_nv=DATA_NV_LIMIT, body=body, armature=armature
+        robot = (
+            load_robot(spec, floating=floating, max_nv=DATA_NV_LIMIT)
+            if chain is not None
+            else robot_for_path(spec, floating=floating, body=body, armature=armature)
         )
+        data = robot.new_data()  # refused above DATA_NV_LIMIT, naming the O(n) path
         qs = _robot_configurations(robot, q, random, seed, key, spec)
-        data = robot.new_data()
         results = [analyze_configuration(robot, np.asarray(x), data=data) for x in qs]
         if random is not None:
             placeholders = placeholder_limit_joints(robot)

@@ -2,9 +2,10 @@
 
 Pinocchio's Data for an n-joint model needs memory growing as n³ (about 1.8 GB at n = 300,
 8 GB at 500), and the dense GIM n². Above `DATA_NV_LIMIT` joints
-(or on request) gimwatch analyses fixed-base chains and trees with the compiled DeNOC
-recursions instead: diag M and δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each), κ_S
-from Lanczos on D^-1/2 M D^-1/2 x and its inverse (the same products, scaled by the O(n) diagonal);
+(or on request) gimwatch analyses chains and trees — fixed or floating, with ball and free
+joints on any body and several trees — with the compiled DeNOC recursions instead: diag M and
+δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each), κ_S from Lanczos on
+D^-1/2 M D^-1/2 x and its inverse (the same products, scaled by the O(n) diagonal);
 the backward (UDUᵀ) pivots from the articulated-body factor. The forward (LDLᵀ) pivots and
 the full spectrum need M itself and are not computed on this path.
 """
@@ -55,10 +56,10 @@ def analyze_linear(
     seed: int = 0,
     rtol: float = 1e-9,
 ) -> GimAnalysis:
-    """Conditioning of M(q) with O(n) time and memory (fixed base only).
+    """Conditioning of M(q) with O(n) time and memory (any tree DeNOC reads).
 
     Args:
-        model: The DeNOC model (fixed base).
+        model: The DeNOC model: fixed or floating base, free joints, several trees.
         q: Configuration in the model's layout.
         name: Robot name for the record.
         metrics: Which of `LINEAR_METRICS` to compute; the others are None.
@@ -74,7 +75,7 @@ def analyze_linear(
             hint=did_you_mean(unknown[0], LINEAR_METRICS).removeprefix("; "),
         )
     state = GimState(linear=model.state(q), lanczos=(seed, rtol), to_public=model.to_public)
-    check_massless(state.diag, model.joint_names, name=name, source=model.tree.source)
+    check_massless(state.diag, model.dof_names, name=name, source=model.tree.source)
     asked = [key for key in LINEAR_METRICS if key in metrics or key == "diagonal_ratio"]
     return analysis_record(
         state,
@@ -82,6 +83,6 @@ def analyze_linear(
         name=name,
         nv=model.nv,
         q=q,
-        dof_names=model.joint_names,
+        dof_names=model.dof_names,
         method="denoc-linear",
     )

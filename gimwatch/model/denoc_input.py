@@ -1,4 +1,9 @@
-"""DeNOC's input written from a Pinocchio model: URDF text of its tree.
+"""DeNOC's input written from a Pinocchio model: its body tree as arrays, or URDF text of it.
+
+`tree_arrays` gives DeNOC's body tree of any model of revolute, prismatic and free joints:
+one body per joint, the world as body 0, free joints on any body and several trees (what
+`gimwatch.denoc.body_tree` takes). It reads the Model only, never a Data (whose memory
+grows as nv³), so it serves the O(n) path at any size.
 
 DeNOC (`gimwatch.denoc`) reads URDF with revolute and prismatic joints on one tree, floating
 only by one free joint at the root. `urdf_of_model` writes that URDF for a model DeNOC can
@@ -22,7 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-__all__ = ["InstantaneousURDF", "instantaneous_urdf", "urdf_of_model"]
+from gimwatch.errors import RobotError
+
+__all__ = ["InstantaneousURDF", "instantaneous_urdf", "tree_arrays", "urdf_of_model"]
 
 _INERTIA_ENTRIES = {
     "ixx": (0, 0),
@@ -94,6 +101,55 @@ def _limit(model: pin.Model, joint, urdf_kind: str) -> str:
         return ""
     lower, upper = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
     return f'<limit lower="{float(lower)!r}" upper="{float(upper)!r}" effort="0" velocity="0"/>'
+
+
+# `gimwatch.denoc.BodyTree.kind` of each URDF type, and of Pinocchio's free-flyer
+_KIND = {"revolute": 1, "continuous": 2, "prismatic": 3}
+_FREE_KIND, _BALL_KIND = 4, 5
+
+
+def tree_arrays(model: pin.Model, *, source: str) -> dict:
+    """The fields of DeNOC's body tree of ``model`` (keyword arguments of ``body_tree``).
+
+    Body k is Pinocchio's joint k with its inertia (about its centre of mass, in the joint
+    frame); body 0 is the world, fixed (``floating`` False); a free-flyer, gimwatch's or a
+    file's own, at the root or not, is a free joint of its body, a spherical joint a ball.
+
+    Raises:
+        RobotError: A joint DeNOC has no recursion for (a ball, planar, mimic or composite
+            joint), named.
+    """
+    n = model.njoints
+    kind, axis = np.zeros(n, dtype=np.intp), np.zeros((n, 3))
+    for k in range(1, n):
+        joint, shortname = model.joints[k], model.joints[k].shortname()
+        if "FreeFlyer" in shortname:
+            kind[k] = _FREE_KIND
+        elif shortname == "JointModelSpherical":
+            kind[k] = _BALL_KIND
+        elif shortname in _ONE_DOF:
+            kind[k] = _KIND[_ONE_DOF[shortname]]
+            axis[k] = _joint_axis(shortname, joint)
+            axis[k] /= np.linalg.norm(axis[k])
+        else:
+            raise RobotError(
+                source,
+                f"joint {model.names[k]!r} ({shortname.removeprefix('JointModel')}) has no "
+                "O(n) DeNOC recursion (revolute, prismatic, ball and free joints only)",
+            )
+    return {
+        "source": source,
+        "floating": False,
+        "joint_names": ("", *model.names[1:]),
+        "parent": list(model.parents),
+        "kind": kind,
+        "placement_rotation": [model.jointPlacements[k].rotation for k in range(n)],
+        "placement_translation": [model.jointPlacements[k].translation for k in range(n)],
+        "axis": axis,
+        "mass": [model.inertias[k].mass for k in range(n)],
+        "com": [model.inertias[k].lever for k in range(n)],
+        "inertia": [model.inertias[k].inertia for k in range(n)],
+    }
 
 
 def urdf_of_model(model: pin.Model) -> str:

@@ -213,7 +213,8 @@ def _too_large(spec: str, nv: int) -> RobotError:
     return RobotError(
         spec,
         f"nv = {nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
-        f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
+        f"limit DATA_NV_LIMIT = {DATA_NV_LIMIT}); the O(n) DeNOC path reads it: "
+        "analyze with backend 'denoc' (the default 'auto' takes it above the limit)",
     )
 
 

@@ -138,9 +138,7 @@ class DenocBackend(Backend):
         return self.lean.gim_diagonal(np.asarray(q, dtype=float))
 
     def energy(self, q, v):
-        if self.robot.free_base:
-            return super().energy(q, v)
-        return self.denoc.energy(q, v, gravity=self._g)
+        return self.denoc.energy(q, v, gravity=self._g)  # O(n), any tree DeNOC reads
 
 
 #: The registry: scene backend name -> class.
@@ -151,7 +149,7 @@ BACKENDS: dict[str, type[Backend]] = {
 
 def make_backend(name: str, robot: Robot, gravity: np.ndarray | None) -> Backend:
     """Build the backend registered as ``name`` (``denoc`` instead above DATA_NV_LIMIT)."""
-    if name != DenocBackend.name and robot.nv > DATA_NV_LIMIT and not robot.floating:
+    if name != DenocBackend.name and robot.nv > DATA_NV_LIMIT:
         warnings.warn(
             f"{robot.name} has nv = {robot.nv} > {DATA_NV_LIMIT}: using the O(n) denoc backend "
             f"instead of {name} (Pinocchio's Data would need GBs)",

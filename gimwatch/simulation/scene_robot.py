@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from gimwatch.errors import ConditioningError, GimwatchError, RobotError, SceneError
+from gimwatch.errors import ConditioningError, GimwatchError, SceneError
 from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import (
-    DATA_NV_LIMIT,
     Robot,
     chain_robot,
     load_robot,
@@ -28,16 +27,8 @@ __all__ = ["initial_state", "load_scene_robot"]
 
 
 def _chain_robot(params: dict, floating: bool) -> Robot:
-    # checked before any URDF is generated: a floating base needs Pinocchio's Data (memory
-    # ∝ nv³); a fixed one runs on the O(n) denoc backend, up to the URDF parser's depth
-    # (chain_robot checks that)
-    nv = params["n"] + 6
-    if floating and nv > DATA_NV_LIMIT:
-        raise RobotError(
-            f"chain:{params['n']}",
-            f"nv = {nv} is too large for Pinocchio's Data (its memory grows as nv^3; "
-            f"limit {DATA_NV_LIMIT}); use the O(n) DeNOC path instead",
-        )
+    # above DATA_NV_LIMIT, fixed or floating, a chain runs on the O(n) denoc backend (no
+    # Pinocchio Data), up to the URDF parser's depth (chain_robot checks that)
     options = {k: v for k, v in params.items() if k != "n"}
     return chain_robot(chain_spec(params["n"], **options), floating=floating)
 
@@ -50,9 +41,7 @@ def load_scene_robot(scene) -> Robot:
         floating, mjcf = scene.robot.floating, {}
         if scene.robot.body or not scene.robot.armature:
             mjcf = {"body": scene.robot.body, "armature": scene.robot.armature}
-        return load_robot(
-            scene.robot.spec, floating=floating, max_nv=DATA_NV_LIMIT if floating else None, **mjcf
-        )
+        return load_robot(scene.robot.spec, floating=floating, **mjcf)
     except SceneError:
         raise
     except GimwatchError as exc:
