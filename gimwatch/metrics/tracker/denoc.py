@@ -51,13 +51,19 @@ def _pivot_signs(model):
     """(positive, negative) pivots of the last articulated factor (NaN pivots count as neither)."""
     index, floating, scal, root = model[0], model[1], model[6], model[7]
     positive = negative = 0
-    for i in range(1, index.shape[0]):
-        positive += scal[i, 0] > 0.0
-        negative += scal[i, 0] < 0.0
-    if floating:
-        for k in range(6):
-            positive += root[6, k] > 0.0
-            negative += root[6, k] < 0.0
+    for i in range(index.shape[0]):
+        kind = index[i, 1]
+        if i == 0:  # the base: six pivots when it floats, none when it is the world
+            width = 6 if floating else 0
+        else:  # a free joint's body six, a ball's three (their UDUᵀ blocks), else one
+            width = 6 if kind == 4 else (3 if kind == 5 else 0)
+        if width:
+            for k in range(width):
+                positive += root[i, 6, k] > 0.0
+                negative += root[i, 6, k] < 0.0
+        elif i > 0:
+            positive += scal[i, 0] > 0.0
+            negative += scal[i, 0] < 0.0
     return positive, negative
 
 
