@@ -63,3 +63,24 @@ def test_a_quirk_that_would_change_m_is_refused_with_an_actionable_class(name):
 def test_every_reason_class_is_one_a_user_can_act_on():
     assert all(":" in kind for _, kind in sweep.REASONS)  # each says what to do
     assert sweep.reason_class("something unforeseen") == "other"
+
+
+@pytest.mark.parametrize("name", sorted(LENIENT))
+def test_denoc_reads_the_lenient_files_as_pinocchio_does(name):
+    # the independent DeNOC reader applies the same lenient readings (a welded invalid
+    # inertia on a fixed base included), so its M equals Pinocchio's at a random q
+    import warnings
+
+    import numpy as np
+
+    from gimwatch.metrics.denoc_robot import denoc_model
+    from gimwatch.model.inertia import gim
+    from gimwatch.model.robots import load_robot, random_configurations
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = load_robot(str(QUIRKS / name))
+        model = denoc_model(robot)
+    q = random_configurations(robot, 1, seed=2)[0]
+    M = gim(robot, q)
+    assert np.abs(model.gim(q) - M).max() <= 1e-12 * np.abs(M).max()

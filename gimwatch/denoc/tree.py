@@ -155,7 +155,7 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
         URDFError: The links do not form a tree, a joint type is not revolute, continuous,
             prismatic or fixed, or a number DeNOC relies on is not finite (or an axis is 0).
     """
-    robot = _load_yourdfpy(check_urdf(xml, source), source)
+    robot = _load_yourdfpy(check_urdf(xml, source, floating=floating), source)
     children: dict[str, list] = {}
     for joint in robot.joints:
         if joint.type not in _SUPPORTED:
