@@ -113,3 +113,207 @@ def test_analyze_reads_numpy_printed_q(q, capsys):
     record = json.loads(out)["configurations"][0]
     assert record["q"] == [float(x) for x in q]
     assert record["kappa"] == pytest.approx(condition_number(M), rel=1e-12)
+
+
+# --- M from MuJoCo without mj_forward: a self-colliding flex in a tiny arena ---------------
+
+#: A 5 x 5 cloth (75 slide DoFs) whose self-collision overflows a 20 KB arena at random poses.
+FLEX_MJCF = """<mujoco model="flexself">
+  <size memory="{memory}"/>
+  <worldbody>
+    <flexcomp name="cloth" type="grid" count="5 5 1" spacing="0.05 0.05 0.05" radius="0.01"
+              dim="2" mass="1">
+      <contact selfcollide="bvh"/>
+      <edge equality="false"/>
+    </flexcomp>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _random_qpos(mj_model, seed: int):
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    return mj_model.qpos0 + rng.uniform(-0.05, 0.05, mj_model.nq)
+
+
+def test_mujoco_m_of_a_self_colliding_flex_needs_no_collision(tmp_path):
+    """mj_forward fails (arena overflow in the collision stage); gimwatch's M does not, and
+    equals mj_fullM after mj_forward on the same model given a large arena."""
+    import mujoco
+    import numpy as np
+
+    from gimwatch.model.mujoco_model import mass_matrix
+
+    small = mujoco.MjModel.from_xml_string(FLEX_MJCF.format(memory="20K"))
+    large = mujoco.MjModel.from_xml_string(FLEX_MJCF.format(memory="50M"))
+    qpos = _random_qpos(small, 0)
+    data = mujoco.MjData(small)
+    data.qpos[:] = qpos
+    with pytest.raises(mujoco.FatalError, match="out of memory"):
+        mujoco.mj_forward(small, data)  # the control: the failure the issue reports
+    reference = mujoco.MjData(large)
+    reference.qpos[:] = qpos
+    mujoco.mj_forward(large, reference)
+    expected = np.zeros((large.nv, large.nv))
+    mujoco.mj_fullM(large, reference, expected)
+    assert small.nv == 75
+    np.testing.assert_array_equal(mass_matrix(small, qpos), expected)
+
+
+def test_crosscheck_of_a_self_colliding_flex_has_no_traceback(tmp_path, capfd):
+    path = tmp_path / "flex.xml"
+    path.write_text(FLEX_MJCF.format(memory="20K"))
+    code, out, err = _run(["crosscheck", str(path), "--peer", "mujoco", "--samples", "3"], capfd)
+    assert "Traceback" not in err and code == 0, err
+    assert "1/1 passed" in out + err
+
+
+def test_mujoco_m_with_tendon_and_actuator_armature_equals_mj_forward(tmp_path):
+    """The stages gimwatch runs (tendon, transmission, makeM) give mj_forward's M exactly
+    when tendons and actuators add armature to M."""
+    import mujoco
+    import numpy as np
+
+    from gimwatch.model.mujoco_model import mass_matrix
+
+    xml = """<mujoco><worldbody>
+      <body><joint name="j1" axis="0 1 0"/><geom type="capsule" fromto="0 0 0 0 0 -1" size=".05"/>
+        <body pos="0 0 -1"><joint name="j2" axis="0 1 0"/>
+          <geom type="capsule" fromto="0 0 0 0 0 -1" size=".05"/></body></body></worldbody>
+      <tendon><fixed armature="0.3"><joint joint="j1" coef="1"/><joint joint="j2" coef="-0.5"/>
+      </fixed></tendon>
+      <actuator><motor joint="j2" armature="0.7" gear="2"/></actuator></mujoco>"""
+    mj_model = mujoco.MjModel.from_xml_string(xml)
+    qpos = np.array([0.3, -0.7])
+    data = mujoco.MjData(mj_model)
+    data.qpos[:] = qpos
+    mujoco.mj_forward(mj_model, data)
+    expected = np.zeros((2, 2))
+    mujoco.mj_fullM(mj_model, data, expected)
+    np.testing.assert_array_equal(mass_matrix(mj_model, qpos), expected)
+
+
+def test_a_mujoco_failure_computing_m_is_one_line(tmp_path, monkeypatch):
+    import mujoco
+
+    from gimwatch.errors import RobotError
+    from gimwatch.model import mujoco_model
+
+    def fail(*args):
+        raise mujoco.FatalError("mj_stackAlloc: out of memory\\n  max = 1")
+
+    monkeypatch.setattr(mujoco, "mj_makeM", fail)
+    small = mujoco.MjModel.from_xml_string(FLEX_MJCF.format(memory="20K"))
+    with pytest.raises(RobotError, match=r"robot 'flex.xml': MuJoCo fails computing M: mj_stack"):
+        mujoco_model.mass_matrix(small, small.qpos0, spec="flex.xml")
+
+
+# --- MuJoCo's compile bounded in time and memory; includes that are not files ---------------
+
+#: 296 bytes that MuJoCo expands into 64,000 free bodies, parsed for minutes.
+REPLICATED_MJCF = """<mujoco>
+  <worldbody>
+    <replicate count="40" euler="0 0 0.1">
+      <replicate count="40" offset="0.1 0 0">
+        <replicate count="40" offset="0 0.1 0">
+          <body><freejoint/><geom size=".01"/></body>
+        </replicate>
+      </replicate>
+    </replicate>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.fixture
+def private_tmp(tmp_path, monkeypatch):
+    """tempfile's folder, to see that a compile leaves nothing behind."""
+    import tempfile
+
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    return folder
+
+
+def test_an_expanding_replicate_is_stopped_at_the_time_bound(
+    tmp_path, private_tmp, monkeypatch, capfd
+):
+    import time
+
+    path = tmp_path / "replicate.xml"
+    path.write_text(REPLICATED_MJCF)
+    assert path.stat().st_size < 400
+    monkeypatch.setenv("GIMWATCH_MJCF_SECONDS", "1.5")
+    start = time.monotonic()
+    code, out, err = _run(["analyze", str(path)], capfd)
+    assert time.monotonic() - start < 15
+    _one_error(code, out, err, str(path), "ran past 1.5 s", "GIMWATCH_MJCF_SECONDS")
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_an_expanding_replicate_is_stopped_at_the_memory_bound(
+    tmp_path, private_tmp, monkeypatch, capfd
+):
+    path = tmp_path / "replicate.xml"
+    path.write_text(REPLICATED_MJCF)
+    monkeypatch.setenv("GIMWATCH_MJCF_MEMORY_MB", "64")
+    monkeypatch.setenv("GIMWATCH_MJCF_SECONDS", "30")
+    code, out, err = _run(["analyze", str(path)], capfd)
+    _one_error(code, out, err, str(path), "memory bound of 64 MiB", "GIMWATCH_MJCF_MEMORY_MB")
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_a_compiled_body_count_is_held_to_the_link_budget(tmp_path, monkeypatch, capfd):
+    path = tmp_path / "replicate.xml"
+    path.write_text(
+        '<mujoco><worldbody><replicate count="60" offset="0.1 0 0">'
+        '<body><joint/><geom size=".01"/></body></replicate></worldbody></mujoco>'
+    )
+    monkeypatch.setenv("GIMWATCH_MAX_LINKS", "50")
+    code, out, err = _run(["analyze", str(path)], capfd)
+    _one_error(code, out, err, str(path), "compiles to 60 bodies", "GIMWATCH_MAX_LINKS")
+
+
+def test_a_compiled_model_equals_mujocos_own_compile(tmp_path, private_tmp):
+    """The child's MJB round trip changes nothing: same nv and M as MuJoCo in-process."""
+    import mujoco
+    import numpy as np
+
+    from gimwatch.model.mjcf_compiled import compile_mjcf
+    from gimwatch.model.mujoco_model import mass_matrix
+
+    path = tmp_path / "flex.xml"
+    path.write_text(FLEX_MJCF.format(memory="20K"))
+    ours = compile_mjcf(str(path))
+    theirs = mujoco.MjModel.from_xml_path(str(path))
+    qpos = _random_qpos(theirs, 1)
+    assert ours.nv == theirs.nv == 75
+    np.testing.assert_array_equal(mass_matrix(ours, qpos), mass_matrix(theirs, qpos))
+    assert list(private_tmp.iterdir()) == []
+
+
+def test_a_mujoco_refusal_from_the_child_is_mujocos_line(tmp_path, capfd):
+    path = tmp_path / "bad.xml"
+    path.write_text('<mujoco><worldbody><body><joint type="bogus"/></body></worldbody></mujoco>')
+    code, out, err = _run(["analyze", str(path)], capfd)
+    _one_error(code, out, err, str(path), "MuJoCo refuses this MJCF", "bogus")
+
+
+def test_an_include_naming_a_fifo_is_refused_before_it_is_opened(tmp_path, monkeypatch, capfd):
+    import os
+    import time
+
+    os.mkfifo(tmp_path / "fifo")
+    path = tmp_path / "robot.xml"
+    path.write_text(
+        '<mujoco><include file="fifo"/><worldbody><body><joint/><geom size=".1"/></body>'
+        "</worldbody></mujoco>"
+    )
+    monkeypatch.setenv("GIMWATCH_MJCF_SECONDS", "20")
+    start = time.monotonic()
+    code, out, err = _run(["analyze", str(path)], capfd)
+    assert time.monotonic() - start < 10  # refused, not waited for until the time bound
+    _one_error(code, out, err, str(path), "'fifo'", "not a regular file")

@@ -37,6 +37,7 @@ import pinocchio as pin
 from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import check_gim
 from gimwatch.model.denoc_input import urdf_of_model
+from gimwatch.model.mujoco_model import make_mass_matrix
 from gimwatch.model.robots import Robot
 
 __all__ = [
@@ -223,7 +224,6 @@ class MujocoSource:
         from gimwatch.model.kernels import positive_ratio  # numba: only for a MuJoCo watch
 
         self._positive_ratio = positive_ratio
-        self._light = not extra  # kinematics + CRB suffice for M at a given q
         self._own = None
         self._order: np.ndarray | None = None
         self._free: list[tuple[int, int]] = []  # (first linear dof in output, qpos of quat)
@@ -305,12 +305,7 @@ class MujocoSource:
             self._own = mujoco.MjData(model)
         data = self._own
         data.qpos[:] = qpos
-        if self._light:
-            mujoco.mj_kinematics(model, data)
-            mujoco.mj_comPos(model, data)
-            mujoco.mj_makeM(model, data)
-        else:  # tendon/actuator armature need the transmissions too
-            mujoco.mj_fwdPosition(model, data)
+        make_mass_matrix(model, data)  # no collision stage: contacts may overflow the arena
         return data
 
     def gim(self, q=None, out: np.ndarray | None = None) -> np.ndarray:
