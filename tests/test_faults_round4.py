@@ -317,3 +317,109 @@ def test_an_include_naming_a_fifo_is_refused_before_it_is_opened(tmp_path, monke
     code, out, err = _run(["analyze", str(path)], capfd)
     assert time.monotonic() - start < 10  # refused, not waited for until the time bound
     _one_error(code, out, err, str(path), "'fifo'", "not a regular file")
+
+
+# --- armature: a file's own free joint, no configurations, a bad margin, the K·nv² budget ----
+
+FREE_BODY_MJCF = """<mujoco><worldbody>
+  <body name="base"><freejoint name="float"/><geom size=".1" mass="2"/>
+    <body pos="0 0 -.5"><joint name="hinge" axis="0 1 0"/><geom size=".05" mass="1"/></body>
+  </body></worldbody></mujoco>"""
+
+
+def test_armature_refuses_an_mjcf_files_own_free_joint(tmp_path, capfd):
+    path = tmp_path / "free.xml"
+    path.write_text(FREE_BODY_MJCF)
+    code, out, err = _run(["armature", str(path), "--target", "5"], capfd)
+    _one_error(code, out, err, "joint 'float'", "not a free joint")
+
+
+@pytest.mark.parametrize(
+    ("configurations", "target", "margin", "fragment"),
+    [
+        ("none", 10.0, 1e-9, "at least one configuration"),
+        ("one", 10.0, -0.5, "margin must be a finite number >= 0"),
+        ("one", 10.0, float("nan"), "margin must be a finite number >= 0"),
+        ("one", float("nan"), 1e-9, "target must be a number > 1"),
+    ],
+)
+def test_minimal_armature_refuses_what_gives_no_valid_plan(
+    configurations, target, margin, fragment
+):
+    import numpy as np
+
+    from gimwatch.errors import InputError
+    from gimwatch.explain.armature import minimal_armature
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot("chain:3")
+    qs = np.zeros((0, 3)) if configurations == "none" else np.full((1, 3), 0.3)
+    with pytest.raises(InputError, match=fragment):
+        minimal_armature(robot, qs, target, margin=margin)
+
+
+def test_a_negative_margin_would_miss_the_target():
+    """The control of the refusal above: with the margin at -0.5 the plan's κ after exceeds
+    the target (computed from Pinocchio's M + diag(a), NumPy's eigenvalues)."""
+    import numpy as np
+    import pinocchio as pin
+
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot("chain:3")
+    q = np.full(3, 0.3)
+    M = pin.crba(robot.model, robot.model.createData(), q)
+    M = np.triu(M) + np.triu(M, 1).T
+    w = np.linalg.eigvalsh(M)
+    target = 10.0
+    a = (w[-1] - target * w[0]) / (target - 1) * (1 - 0.5)
+    w_after = np.linalg.eigvalsh(M + a * np.eye(3))
+    assert w_after[-1] / w_after[0] > target
+
+
+def test_armature_samples_beyond_the_matrix_budget_are_refused_before_drawing(capfd):
+    from gimwatch.explain.armature import MAX_MATRIX_BYTES, max_configurations
+
+    assert max_configurations(200) == MAX_MATRIX_BYTES // (8 * 200 * 200) == 3355
+    code, out, err = _run(
+        ["armature", "chain:200", "--target", "1e4", "--samples", "100000"], capfd
+    )
+    _one_error(code, out, err, "--samples must be at most 3355", "1024 MiB budget", "100000")
+
+
+def test_minimal_armature_refuses_more_configurations_than_fit():
+    import numpy as np
+
+    from gimwatch.errors import InputError
+    from gimwatch.explain.armature import max_configurations, minimal_armature
+    from gimwatch.model.robots import load_robot
+
+    robot = load_robot("chain:200")
+    qs = np.zeros((max_configurations(200) + 1, 200))
+    with pytest.raises(InputError, match="at most 3355 for nv = 200"):
+        minimal_armature(robot, qs, 1e4)
+
+
+# --- Watch.from_mujoco(robot=...): joint types must match, not only names -----------------
+
+
+def test_from_mujoco_refuses_a_slide_for_a_hinge_of_the_same_name():
+    import mujoco
+
+    from gimwatch.errors import InputError
+    from gimwatch.model.robots import load_robot
+    from gimwatch.watch import Watch
+
+    robot = load_robot("chain:2")  # joints joint_1, joint_2: revolute
+    xml = """<mujoco><worldbody>
+      <body><joint name="joint_1" type="slide" axis="1 0 0"/><geom size=".1"/>
+        <body pos="0 0 -1"><joint name="joint_2" axis="0 1 0"/><geom size=".1"/></body>
+      </body></worldbody></mujoco>"""
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    with pytest.raises(
+        InputError, match=r"joint 'joint_1' must be a MuJoCo hinge joint .* got 'slide'"
+    ):
+        Watch.from_mujoco(model, data, robot=robot)
+    hinge = mujoco.MjModel.from_xml_string(xml.replace('type="slide" axis="1 0 0"', 'axis="0 1 0"'))
+    Watch.from_mujoco(hinge, mujoco.MjData(hinge), robot=robot)  # the control: accepted

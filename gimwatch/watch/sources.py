@@ -262,6 +262,14 @@ class MujocoSource:
                 raise InputError(
                     "robot", "a model whose joints MuJoCo has too (by name)", f"joint '{name}'"
                 )
+            expected = _mujoco_joint_type(kind)
+            if expected is not None and int(model.jnt_type[j]) != expected:
+                found = mujoco.mjtJoint(int(model.jnt_type[j])).name.removeprefix("mjJNT_")
+                raise InputError(
+                    f"joint '{name}'",
+                    f"a MuJoCo {_TYPE_NAMES[expected]} joint like the robot's ({kind})",
+                    found.lower(),
+                )
             width = 6 if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE else None
             dofs = int(np.sum(model.dof_jntid == j)) if width is None else width
             if dofs != joint.nv:
@@ -363,3 +371,20 @@ def import_mujoco():
             hint="pip install 'gimwatch[peers]'",
         ) from None
     return mujoco
+
+
+#: MuJoCo's joint types (mjtJoint) by their numbers, as MJCF names them.
+_TYPE_NAMES = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
+
+
+def _mujoco_joint_type(kind: str) -> int | None:
+    """MuJoCo's joint type matching a Pinocchio joint's shortname, None if none is known."""
+    if "FreeFlyer" in kind:
+        return 0
+    if "Spherical" in kind:
+        return 1
+    if "Prismatic" in kind or kind in ("JointModelPX", "JointModelPY", "JointModelPZ"):
+        return 2
+    if "Revolute" in kind or kind.removeprefix("JointModelR").removeprefix("UB") in ("X", "Y", "Z"):
+        return 3
+    return None
