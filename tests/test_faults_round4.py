@@ -423,3 +423,89 @@ def test_from_mujoco_refuses_a_slide_for_a_hinge_of_the_same_name():
         Watch.from_mujoco(model, data, robot=robot)
     hinge = mujoco.MjModel.from_xml_string(xml.replace('type="slide" axis="1 0 0"', 'axis="0 1 0"'))
     Watch.from_mujoco(hinge, mujoco.MjData(hinge), robot=robot)  # the control: accepted
+
+
+# --- network handshakes: silent ports, HTTP servers, malformed URLs ------------------------
+
+
+@pytest.fixture
+def local_server():
+    """A TCP server on 127.0.0.1 that stays silent, or answers every connection like HTTP."""
+    import socket
+    import threading
+
+    servers = []
+
+    def start(answer: bytes | None) -> str:
+        listener = socket.socket()
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(8)
+        accepted = []
+
+        def serve():
+            while True:
+                try:
+                    conn, _ = listener.accept()
+                except OSError:
+                    return
+                accepted.append(conn)
+                if answer is not None:
+                    conn.sendall(answer)
+
+        threading.Thread(target=serve, daemon=True).start()
+        servers.append((listener, accepted))
+        return f"tcp://127.0.0.1:{listener.getsockname()[1]}"
+
+    yield start
+    for listener, accepted in servers:
+        listener.close()
+        for conn in accepted:
+            conn.close()
+
+
+HTTP_ANSWER = b"HTTP/1.1 200 OK\r\nContent-Length: 2\r\n\r\nok"
+
+
+@pytest.mark.parametrize(
+    ("answer", "fragment"),
+    [(None, "no Dask handshake within 1 s"), (HTTP_ANSWER, "not a Dask scheduler")],
+)
+@pytest.mark.parametrize("command", ["survey", "map"])
+def test_a_scheduler_address_that_is_no_scheduler_is_one_line(
+    command, answer, fragment, local_server, monkeypatch, tmp_path, capfd
+):
+    import time
+
+    from gimwatch.survey import scheduler_address
+
+    monkeypatch.setattr(scheduler_address, "HANDSHAKE_SECONDS", 1.0)
+    address = local_server(answer)
+    argv = {
+        "survey": ["survey", "chain:2", "--samples", "4"],
+        "map": ["map", "chain:2", "--joints", "joint_1", "joint_2", "--grid", "3"],
+    }[command] + ["--scheduler", address, "-o", str(tmp_path / "out")]
+    start = time.monotonic()
+    code, out, err = _run(argv, capfd)
+    assert time.monotonic() - start < 30
+    _one_error(code, out, err, address, fragment)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(
+    "address", ["tcp://[::1", "tcp://host:99999", "tcp://h:1/x?y#z", "http//x"]
+)
+def test_a_malformed_scheduler_url_is_one_line(address, capfd):
+    code, out, err = _run(["survey", "chain:2", "--samples", "4", "--scheduler", address], capfd)
+    _one_error(code, out, err, "--scheduler must be", repr(address))
+
+
+def test_a_real_dask_scheduler_passes_the_probe():
+    """The control: a Dask scheduler's first frame is read as a handshake and accepted."""
+    distributed = pytest.importorskip("distributed")
+
+    from gimwatch.survey.scheduler_address import probe_scheduler
+
+    with distributed.LocalCluster(
+        n_workers=0, processes=False, dashboard_address=None, protocol="tcp"
+    ) as cluster:
+        probe_scheduler(cluster.scheduler_address, seconds=10)
