@@ -509,3 +509,37 @@ def test_a_real_dask_scheduler_passes_the_probe():
         n_workers=0, processes=False, dashboard_address=None, protocol="tcp"
     ) as cluster:
         probe_scheduler(cluster.scheduler_address, seconds=10)
+
+
+# --- library calls with malformed ranges; map --workers capped as survey --------------------
+
+
+@pytest.mark.parametrize(
+    ("keyword", "value", "fragment"),
+    [
+        ("ranges", [(0, 1)], "two (lower, upper) pairs"),
+        ("ranges", [(0, 1, 2), (0, 1)], "--range must be numbers"),
+        ("ranges", [("a", 1), (0, 1)], "--range must be numbers"),
+        ("ranges", 3.0, "two (lower, upper) pairs"),
+        ("ranges", [(float("nan"), 1), (0, 1)], "finite lower < upper"),
+        ("q", ["a", "b", "c"], "--q must be numbers"),
+    ],
+)
+def test_conditioning_map_refuses_malformed_input_in_one_line(keyword, value, fragment):
+    from gimwatch.errors import InputError
+    from gimwatch.explain.maps import conditioning_map
+
+    with pytest.raises(InputError, match=fragment.replace("(", r"\(").replace(")", r"\)")):
+        conditioning_map("chain:3", ["joint_1", "joint_2"], grid=3, **{keyword: value})
+
+
+def test_map_workers_are_capped_as_survey_caps_them(monkeypatch, tmp_path, capfd):
+    monkeypatch.setenv("GIMWATCH_MAX_WORKERS", "2")
+    argv = ["map", "chain:2", "--joints", "joint_1", "joint_2", "--grid", "3"]
+    code, out, err = _run([*argv, "--workers", "64", "-o", str(tmp_path / "m")], capfd)
+    _one_error(code, out, err, "--workers must be at most 2", "GIMWATCH_MAX_WORKERS", "64")
+    assert not (tmp_path / "m").exists()
+    code, out, err = _run(
+        ["survey", "chain:2", "--workers", "64", "-o", str(tmp_path / "s")], capfd
+    )
+    _one_error(code, out, err, "--workers must be at most 2")  # the same rule, the same line

@@ -283,6 +283,22 @@ def _grid_chunk(spec, path, axes, base_q, x, y_rows, metrics) -> np.ndarray:
     return values
 
 
+def _numbers(value, name: str) -> np.ndarray:
+    """``value`` as a float array, or one line naming ``name`` (not NumPy's ValueError)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(name, "numbers", value) from None
+
+
+def _check_ranges(ranges) -> list[tuple[float, float]]:
+    """Two (lower, upper) pairs as floats, or one line (a wrong shape, text, a scalar)."""
+    limits = _numbers(ranges, "--range")
+    if limits.shape != (2, 2):
+        raise InputError("--range", "two (lower, upper) pairs, one per joint", ranges)
+    return [(float(lo), float(hi)) for lo, hi in limits]
+
+
 def conditioning_map(
     spec: str,
     joints: Sequence[str],
@@ -320,12 +336,12 @@ def conditioning_map(
     metrics = check_metrics(list(metrics), path)
     name, axes, units, limits, base_q = map_axes(spec, path, joints)
     if ranges is not None:
-        limits = [tuple(map(float, r)) for r in ranges]
+        limits = _check_ranges(ranges)
         for joint, (lo, hi) in zip(joints, limits, strict=True):
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                 raise InputError("--range", "finite lower < upper", (joint, lo, hi))
     if q is not None:
-        q = np.asarray(q, dtype=float).ravel()
+        q = _numbers(q, "--q").ravel()
         if q.shape != base_q.shape or not np.all(np.isfinite(q)):
             raise InputError("--q", f"{base_q.size} finite numbers", q.size)
         base_q = q
