@@ -543,3 +543,74 @@ def test_map_workers_are_capped_as_survey_caps_them(monkeypatch, tmp_path, capfd
         ["survey", "chain:2", "--workers", "64", "-o", str(tmp_path / "s")], capfd
     )
     _one_error(code, out, err, "--workers must be at most 2")  # the same rule, the same line
+
+
+# --- trajectory CSVs: the row limit checked while the file streams ---------------------------
+
+
+def test_the_trajectory_row_limit_is_checked_before_the_file_is_read_whole(tmp_path, monkeypatch):
+    """A writer that sends 6 rows and never closes: streamed, the sixth row is refused at
+    once (a limit of 5); read whole, the reader would wait for the end of the file."""
+    import os
+    import threading
+
+    from gimwatch.errors import InputError
+    from gimwatch.explain import trajectory
+
+    monkeypatch.setattr(trajectory, "MAX_SAMPLES", 5)
+    fifo = tmp_path / "q.csv"
+    os.mkfifo(fifo)
+    release = threading.Event()
+
+    def write():
+        with open(fifo, "w") as stream:
+            stream.write("0.1,0.2\n" * 6)
+            stream.flush()
+            release.wait(30)
+
+    writer = threading.Thread(target=write, daemon=True)
+    writer.start()
+    outcome = []
+
+    def read():
+        try:
+            trajectory.read_trajectory_csv(fifo, ["joint_1", "joint_2"])
+        except InputError as exc:
+            outcome.append(str(exc))
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    reader.join(10)
+    refused_while_open = list(outcome)  # before the writer closes the file
+    release.set()
+    reader.join(10)
+    writer.join(10)
+    assert refused_while_open and "at most 5 rows" in refused_while_open[0], outcome
+
+
+def test_a_trajectory_line_too_long_is_refused_as_it_streams(tmp_path):
+    from gimwatch.errors import InputError
+    from gimwatch.explain.trajectory import MAX_LINE_CHARS, read_trajectory_csv
+
+    path = tmp_path / "q.csv"
+    path.write_text("0.1,0.2\n" + "1" * 5_000_000 + "\n")
+    with pytest.raises(
+        InputError, match=rf"q.csv:2 must be a line of at most {3 * MAX_LINE_CHARS}"
+    ):
+        read_trajectory_csv(path, ["joint_1", "joint_2"])
+
+
+def test_a_streamed_trajectory_equals_numpys_reading(tmp_path):
+    """The control: more rows than one block, a header and a time column, read as NumPy does."""
+    import numpy as np
+
+    from gimwatch.explain.trajectory import read_trajectory_csv
+
+    rng = np.random.default_rng(3)
+    table = rng.normal(size=(70_000, 3))
+    path = tmp_path / "q.csv"
+    np.savetxt(path, table, delimiter=",", header="t,joint_1,joint_2", comments="")
+    time, qs = read_trajectory_csv(path, ["joint_1", "joint_2"])
+    expected = np.loadtxt(path, delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(time, expected[:, 0])
+    np.testing.assert_array_equal(qs, expected[:, 1:])
