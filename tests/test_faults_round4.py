@@ -614,3 +614,43 @@ def test_a_streamed_trajectory_equals_numpys_reading(tmp_path):
     expected = np.loadtxt(path, delimiter=",", skiprows=1)
     np.testing.assert_array_equal(time, expected[:, 0])
     np.testing.assert_array_equal(qs, expected[:, 1:])
+
+
+# --- a robot file whose name is not UTF-8 ---------------------------------------------------
+
+
+@pytest.fixture
+def non_utf8_robot(tmp_path):
+    """A folder with ok.urdf and rob\\xffot.urdf (the same 3-link chain)."""
+    import os
+
+    from gimwatch.model.chains import chain_spec, generate_chain_urdf
+
+    folder = tmp_path / "robots"
+    folder.mkdir()
+    text = generate_chain_urdf(chain_spec(3))
+    (folder / "ok.urdf").write_text(text)
+    with open(os.fsencode(folder) + b"/rob\xffot.urdf", "w") as stream:
+        stream.write(text)
+    return folder, os.fsdecode(os.fsencode(folder) + b"/rob\xffot.urdf")
+
+
+def test_a_non_utf8_file_name_draws_its_map(non_utf8_robot, tmp_path, capfd):
+    _, path = non_utf8_robot
+    out_dir = tmp_path / "map"
+    argv = ["map", path, "--joints", "joint_1", "joint_2", "--grid", "3", "-o", str(out_dir)]
+    code, out, err = _run(argv, capfd)
+    assert code == 0 and "Traceback" not in err, err
+    assert (out_dir / "map_kappa.png").stat().st_size > 0
+
+
+def test_a_non_utf8_file_name_loses_no_survey_batch(non_utf8_robot, tmp_path, capfd):
+    import csv
+
+    folder, _ = non_utf8_robot
+    out_dir = tmp_path / "survey"
+    code, out, err = _run(["survey", str(folder), "--samples", "5", "-o", str(out_dir)], capfd)
+    assert code == 0 and "Traceback" not in err, err
+    with open(out_dir / "survey.csv", encoding="utf-8") as stream:
+        robots = {row["robot"] for row in csv.DictReader(stream)}
+    assert robots == {"ok", "rob\\xffot"}
