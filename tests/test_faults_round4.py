@@ -639,7 +639,7 @@ def test_a_non_utf8_file_name_draws_its_map(non_utf8_robot, tmp_path, capfd):
     _, path = non_utf8_robot
     out_dir = tmp_path / "map"
     argv = ["map", path, "--joints", "joint_1", "joint_2", "--grid", "3", "-o", str(out_dir)]
-    code, out, err = _run(argv, capfd)
+    code, _out, err = _run(argv, capfd)
     assert code == 0 and "Traceback" not in err, err
     assert (out_dir / "map_kappa.png").stat().st_size > 0
 
@@ -649,8 +649,35 @@ def test_a_non_utf8_file_name_loses_no_survey_batch(non_utf8_robot, tmp_path, ca
 
     folder, _ = non_utf8_robot
     out_dir = tmp_path / "survey"
-    code, out, err = _run(["survey", str(folder), "--samples", "5", "-o", str(out_dir)], capfd)
+    code, _out, err = _run(["survey", str(folder), "--samples", "5", "-o", str(out_dir)], capfd)
     assert code == 0 and "Traceback" not in err, err
     with open(out_dir / "survey.csv", encoding="utf-8") as stream:
         robots = {row["robot"] for row in csv.DictReader(stream)}
     assert robots == {"ok", "rob\\xffot"}
+
+
+# --- docs/limits.md states each limit with the code's number -------------------------------
+
+
+def test_limits_page_states_the_numbers_the_code_holds():
+    from pathlib import Path
+
+    from gimwatch.explain import trajectory
+    from gimwatch.explain.armature import MAX_MATRIX_BYTES, max_configurations
+    from gimwatch.model import mjcf_sandbox
+    from gimwatch.model.urdf_text import DEFAULT_MAX_LINKS
+    from gimwatch.survey import scheduler_address
+
+    page = (Path(__file__).resolve().parents[1] / "docs/limits.md").read_text(encoding="utf-8")
+    section = page[page.index("## MuJoCo's compile, the command line, the network") :]
+    expected = [
+        f"| {mjcf_sandbox.DEFAULT_COMPILE_SECONDS:g} s |",
+        f"| {mjcf_sandbox.DEFAULT_COMPILE_MEMORY_MB} MiB of address space",
+        f"| {DEFAULT_MAX_LINKS:,} (the `<body>` budget",
+        f"| {scheduler_address.HANDSHAKE_SECONDS:g} s; a first frame of at most "
+        f"{scheduler_address.MAX_HANDSHAKE_BYTES >> 20} MiB |",
+        f"| {trajectory.MAX_SAMPLES:,} rows, {trajectory.MAX_LINE_CHARS} characters per column",
+        f"| {MAX_MATRIX_BYTES >> 30} GiB: K ≤ {max_configurations(200):,} at nv = 200 |",
+    ]
+    for text in expected:
+        assert text in section, text
