@@ -681,3 +681,30 @@ def test_limits_page_states_the_numbers_the_code_holds():
     ]
     for text in expected:
         assert text in section, text
+
+
+# --- a survey of many robots: the per-robot grid is bounded -----------------------------------
+
+
+def test_the_survey_grid_draws_at_most_grid_panels_the_worst_tracked_first():
+    import dataclasses
+
+    from matplotlib.figure import Figure
+
+    from gimwatch.survey.plots import GRID_PANELS, grid_figsize, plot_kappa_vs_delta_grid
+    from gimwatch.survey.run import run_survey
+
+    base = run_survey(["chain:2"], samples=6, seed=0, workers=1)
+    count = 3 * GRID_PANELS
+    robots = tuple(
+        dataclasses.replace(base.robots[0], name=f"r{i}", pearson_log=1.0 - i / count)
+        for i in range(count)
+    )
+    result = dataclasses.replace(base, robots=robots)
+    assert grid_figsize(count) == grid_figsize(GRID_PANELS)
+    fig = plot_kappa_vs_delta_grid(result, fig=Figure(figsize=grid_figsize(count)))
+    titles = [ax.get_title() for ax in fig.axes if ax.axison]
+    assert len(titles) == GRID_PANELS
+    worst = [f"r{i} " for i in range(count - 1, count - 1 - GRID_PANELS, -1)]  # lowest r
+    assert [t.split("(")[0] for t in titles] == worst
+    assert f"the {GRID_PANELS} of {count} robots" in fig.get_suptitle()
