@@ -523,6 +523,7 @@ def test_a_real_dask_scheduler_passes_the_probe():
         ("ranges", 3.0, "two (lower, upper) pairs"),
         ("ranges", [(float("nan"), 1), (0, 1)], "finite lower < upper"),
         ("q", ["a", "b", "c"], "--q must be numbers"),
+        ("ranges", [(-1e308, 1e308), (0, 1)], "span upper - lower below 1.8e308"),
     ],
 )
 def test_conditioning_map_refuses_malformed_input_in_one_line(keyword, value, fragment):
@@ -708,3 +709,18 @@ def test_the_survey_grid_draws_at_most_grid_panels_the_worst_tracked_first():
     worst = [f"r{i} " for i in range(count - 1, count - 1 - GRID_PANELS, -1)]  # lowest r
     assert [t.split("(")[0] for t in titles] == worst
     assert f"the {GRID_PANELS} of {count} robots" in fig.get_suptitle()
+
+
+def test_a_range_whose_span_overflows_is_one_line_not_numpys_warning(tmp_path, capfd):
+    """Before: NumPy's "overflow encountered in subtract" naming nothing, then a matplotlib
+    traceback on the non-finite grid."""
+    import warnings
+
+    argv = ["map", "chain:2", "--joints", "joint_1", "joint_2", "--grid", "3"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        code, out, err = _run(
+            [*argv, "--range", "-1e308", "1e308", "0", "1", "-o", str(tmp_path / "m")], capfd
+        )
+    _one_error(code, out, err, "--range", "joint_1", "1.8e308")
+    assert not (tmp_path / "m").exists()

@@ -340,6 +340,8 @@ def conditioning_map(
         for joint, (lo, hi) in zip(joints, limits, strict=True):
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                 raise InputError("--range", "finite lower < upper", (joint, lo, hi))
+            if not math.isfinite(hi - lo):  # the grid's steps would overflow to inf
+                raise InputError("--range", "a span upper - lower below 1.8e308", (joint, lo, hi))
     if q is not None:
         q = _numbers(q, "--q").ravel()
         if q.shape != base_q.shape or not np.all(np.isfinite(q)):
