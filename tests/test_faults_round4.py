@@ -663,7 +663,7 @@ def test_a_non_utf8_file_name_loses_no_survey_batch(non_utf8_robot, tmp_path, ca
 def test_limits_page_states_the_numbers_the_code_holds():
     from pathlib import Path
 
-    from gimwatch.explain import trajectory
+    from gimwatch.explain import maps, trajectory
     from gimwatch.explain.armature import MAX_MATRIX_BYTES, max_configurations
     from gimwatch.model import mjcf_sandbox
     from gimwatch.model.urdf_text import DEFAULT_MAX_LINKS
@@ -679,6 +679,9 @@ def test_limits_page_states_the_numbers_the_code_holds():
         f"{scheduler_address.MAX_HANDSHAKE_BYTES >> 20} MiB |",
         f"| {trajectory.MAX_SAMPLES:,} rows, {trajectory.MAX_LINE_CHARS} characters per column",
         f"| {MAX_MATRIX_BYTES >> 30} GiB: K ≤ {max_configurations(200):,} at nv = 200 |",
+        f"| {maps.MATRIX_BLOCK_BYTES >> 20} MiB: blocks of at most "
+        f"{maps.MATRIX_BLOCK_BYTES // (8 * 200**2):,} configurations at nv = 200 |",
+        f"(a chunk is up to {maps.CHUNK_POINTS:,} configurations)",
     ]
     for text in expected:
         assert text in section, text
@@ -724,3 +727,32 @@ def test_a_range_whose_span_overflows_is_one_line_not_numpys_warning(tmp_path, c
         )
     _one_error(code, out, err, "--range", "joint_1", "1.8e308")
     assert not (tmp_path / "m").exists()
+
+
+def test_map_metrics_hold_a_bounded_block_of_matrices(monkeypatch):
+    """K configurations of a 100-DoF chain: 32 MB of M(q) if held at once; with a 1 MiB
+    block the peak stays near it, and κ and δ equal NumPy's on Pinocchio's M."""
+    import tracemalloc
+
+    import numpy as np
+    import pinocchio as pin
+
+    from gimwatch.explain import maps
+    from gimwatch.model.robots import load_robot
+
+    monkeypatch.setattr(maps, "MATRIX_BLOCK_BYTES", 1 << 20)
+    robot = load_robot("chain:100")
+    qs = np.random.default_rng(0).uniform(-1, 1, (400, 100))
+    maps.metrics_at("chain:100", "crba", qs[:2], ("kappa",))  # warm the robot cache
+    tracemalloc.start()
+    values = maps.metrics_at("chain:100", "crba", qs, ("kappa", "diagonal_ratio"))
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 8 << 20, peak
+    data = robot.model.createData()
+    for k in (0, 199, 399):
+        M = pin.crba(robot.model, data, qs[k])
+        M = np.triu(M) + np.triu(M, 1).T
+        w = np.linalg.eigvalsh(M)
+        assert values[0, k] == pytest.approx(w[-1] / w[0], rel=1e-9)
+        assert values[1, k] == pytest.approx(M.diagonal().max() / M.diagonal().min(), rel=1e-15)

@@ -52,6 +52,8 @@ __all__ = [
 MAX_GRID = 2000
 #: Configurations per chunk of work (rows are grouped up to about this many points).
 CHUNK_POINTS = 4000
+#: The most memory the dense matrices M(q) of one block of configurations take (float64).
+MATRIX_BLOCK_BYTES = 256 << 20
 
 
 def scalar_metrics(path: str) -> tuple[str, ...]:
@@ -130,6 +132,18 @@ def metrics_at(spec: str, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -
         return out
     robot = _robot(spec)
     data = robot.new_data()
+    # K dense matrices at once: at most MATRIX_BLOCK_BYTES of them (a 4,000-point chunk of
+    # a 400-DoF robot would hold 5 GB)
+    block = max(1, MATRIX_BLOCK_BYTES // (8 * robot.nv**2))
+    for start in range(0, len(qs), block):
+        part = slice(start, start + block)
+        out[:, part] = _dense_metrics(robot, data, qs[part], metrics)
+    return out
+
+
+def _dense_metrics(robot, data, qs: np.ndarray, metrics: tuple[str, ...]) -> np.ndarray:
+    """The metrics at ``qs`` from Pinocchio's dense M, all of the block's M held at once."""
+    out = np.full((len(metrics), len(qs)), np.nan)
     Ms = np.array([pin.crba(robot.model, data, q) for q in qs])
     diagonal = np.diagonal(Ms, axis1=1, axis2=2)
     for row in diagonal[np.any(~(diagonal > 0), axis=1)][:1]:  # M singular: say which joints
