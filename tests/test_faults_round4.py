@@ -756,3 +756,135 @@ def test_map_metrics_hold_a_bounded_block_of_matrices(monkeypatch):
         w = np.linalg.eigvalsh(M)
         assert values[0, k] == pytest.approx(w[-1] / w[0], rel=1e-9)
         assert values[1, k] == pytest.approx(M.diagonal().max() / M.diagonal().min(), rel=1e-15)
+
+
+# --- the round's hostile command lines, one table: one line and exit 2, or a correct exit 0 --
+
+#: (case id, argv with {dir} for the case's folder, environment, expected exit status).
+#: Files named in argv are written by `make_hostile_files`; servers by `_hostile_servers`.
+HOSTILE_CASES = [
+    ("q-negative-exponent", ["analyze", "chain:2", "--q", "0.1", "-1e-05"], {}, 0),
+    ("q-negative-exponent-only", ["analyze", "chain:2", "--q", "-1e-3", "-2E-1"], {}, 0),
+    ("explain-q-negative-exponent", ["explain", "chain:2", "--q", "-1e-05", "0.1"], {}, 0),
+    ("target-negative-exponent", ["armature", "chain:2", "--target", "-1e-3"], {}, 2),
+    (
+        "flex-arena-crosscheck",
+        ["crosscheck", "{dir}/flex.xml", "--peer", "mujoco", "--samples", "2"],
+        {},
+        0,
+    ),
+    ("replicate-time", ["analyze", "{dir}/replicate.xml"], {"GIMWATCH_MJCF_SECONDS": "2"}, 2),
+    (
+        "replicate-memory",
+        ["analyze", "{dir}/replicate.xml"],
+        {"GIMWATCH_MJCF_MEMORY_MB": "64", "GIMWATCH_MJCF_SECONDS": "30"},
+        2,
+    ),
+    ("include-fifo", ["analyze", "{dir}/include_fifo.xml"], {}, 2),
+    ("scheduler-silent", ["survey", "chain:2", "--samples", "4", "--scheduler", "{silent}"], {}, 2),
+    ("scheduler-http", ["survey", "chain:2", "--samples", "4", "--scheduler", "{http}"], {}, 2),
+    (
+        "map-scheduler-http",
+        [
+            "map",
+            "chain:2",
+            "--joints",
+            "joint_1",
+            "joint_2",
+            "--scheduler",
+            "{http}",
+            "-o",
+            "{dir}/m",
+        ],
+        {},
+        2,
+    ),
+    ("scheduler-bad-url", ["survey", "chain:2", "--scheduler", "tcp://[::1"], {}, 2),
+    (
+        "non-utf8-map",
+        ["map", "{nonutf8}", "--joints", "joint_1", "joint_2", "--grid", "3", "-o", "{dir}/m8"],
+        {},
+        0,
+    ),
+    ("non-utf8-survey", ["survey", "{dir}/robots", "--samples", "4", "-o", "{dir}/s8"], {}, 0),
+    (
+        "trajectory-long-line",
+        ["map", "chain:2", "--trajectory", "{dir}/long.csv", "-o", "{dir}/mt"],
+        {},
+        2,
+    ),
+    ("armature-32-GB", ["armature", "chain:200", "--target", "1e4", "--samples", "100000"], {}, 2),
+    ("armature-own-free-joint", ["armature", "{dir}/free.xml", "--target", "5"], {}, 2),
+    (
+        "map-range-overflow",
+        [
+            "map",
+            "chain:2",
+            "--joints",
+            "joint_1",
+            "joint_2",
+            "--range",
+            "-1e308",
+            "1e308",
+            "0",
+            "1",
+            "-o",
+            "{dir}/mr",
+        ],
+        {},
+        2,
+    ),
+    (
+        "map-workers-64",
+        ["map", "chain:2", "--joints", "joint_1", "joint_2", "--workers", "64", "-o", "{dir}/mw"],
+        {"GIMWATCH_MAX_WORKERS": "2"},
+        2,
+    ),
+]
+
+
+def make_hostile_files(folder) -> dict[str, str]:
+    """Write the files the hostile cases name into ``folder``; the argv placeholders."""
+    import os
+    from pathlib import Path
+
+    from gimwatch.model.chains import chain_spec, generate_chain_urdf
+
+    folder = Path(folder)
+    (folder / "flex.xml").write_text(FLEX_MJCF.format(memory="20K"))
+    (folder / "replicate.xml").write_text(REPLICATED_MJCF)
+    os.mkfifo(folder / "fifo")
+    (folder / "include_fifo.xml").write_text(
+        '<mujoco><include file="fifo"/><worldbody><body><joint/><geom size=".1"/></body>'
+        "</worldbody></mujoco>"
+    )
+    (folder / "free.xml").write_text(FREE_BODY_MJCF)
+    (folder / "long.csv").write_text("0.1,0.2\n" + "1" * 1_000_000 + "\n")
+    robots = folder / "robots"
+    robots.mkdir()
+    text = generate_chain_urdf(chain_spec(3))
+    (robots / "ok.urdf").write_text(text)
+    with open(os.fsencode(robots) + b"/rob\xffot.urdf", "w") as stream:
+        stream.write(text)
+    return {"dir": str(folder), "nonutf8": os.fsdecode(os.fsencode(robots) + b"/rob\xffot.urdf")}
+
+
+@pytest.mark.parametrize(
+    ("argv", "env", "expected"),
+    [pytest.param(argv, env, expected, id=name) for name, argv, env, expected in HOSTILE_CASES],
+)
+def test_hostile_case(argv, env, expected, tmp_path, local_server, monkeypatch, capfd):
+    from gimwatch.survey import scheduler_address
+
+    monkeypatch.setattr(scheduler_address, "HANDSHAKE_SECONDS", 2.0)
+    for key, value in env.items():
+        monkeypatch.setenv(key, value)
+    places = make_hostile_files(tmp_path)
+    places["silent"] = local_server(None)
+    places["http"] = local_server(HTTP_ANSWER)
+    code, out, err = _run([word.format(**places) for word in argv], capfd)
+    assert "Traceback" not in err, err
+    if expected == 2:
+        _one_error(code, out, err)
+    else:
+        assert code == 0, err
