@@ -90,5 +90,5 @@ def test_mujoco_mass_matrix_with_armature_meets_the_target():
 
 @pytest.mark.parametrize("target", [1.0, 0.5, float("nan"), float("inf")])
 def test_bad_targets_are_refused(ur5, target):
-    with pytest.raises(InputError, match="--target must be a number > 1"):
+    with pytest.raises(InputError, match="target must be a number > 1"):
         minimal_armature(ur5, np.zeros((1, 6)), target)

@@ -88,7 +88,20 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+#: A float literal as NumPy or Python prints it (``1e-05``, ``.5``, ``1.E+3``, ``inf``, ``nan``).
+_NUMBER = r"(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf|infinity|nan)"
+#: A word argparse must read as a value, not an option: a negative number, or a
+#: comma-separated list of numbers starting with one (``-1e-05``, ``-inf``, ``-1,2``).
+NEGATIVE_NUMBER = re.compile(rf"^-{_NUMBER}(?:,[+-]?{_NUMBER})*$", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        # Python 3.11's argparse reads only -1 and -1.5 as numbers: '-1e-05', the way NumPy
+        # prints a small negative qpos, was taken for an unknown option.
+        self._negative_number_matcher = NEGATIVE_NUMBER
+
     def error(self, message: str) -> None:  # one line, no usage dump
         raise UsageError(f"{self.prog}: {message}")
 

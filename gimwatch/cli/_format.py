@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import os
 from argparse import ArgumentTypeError
 from collections.abc import Sequence
+
+from gimwatch.errors import InputError
 
 
 def table(headers: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
@@ -99,3 +102,33 @@ def add_mjcf_arguments(parser) -> None:
         action="store_true",
         help="MJCF: leave MuJoCo's joint armature out of M (MuJoCo's M includes it)",
     )
+
+
+#: Local worker processes allowed above the cores (``$GIMWATCH_MAX_WORKERS`` overrides):
+#: each holds a Pinocchio model and its Data, and more than the cores only adds memory.
+MAX_WORKERS_VARIABLE = "GIMWATCH_MAX_WORKERS"
+
+
+def max_workers() -> int:
+    """The most local worker processes: the cores this process may run on, or the variable."""
+    text = os.environ.get(MAX_WORKERS_VARIABLE, "").strip()
+    if text:
+        if not text.isdigit() or int(text) < 1:
+            raise InputError(f"${MAX_WORKERS_VARIABLE}", "a positive integer", text)
+        return int(text)
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def check_workers(workers: int | None) -> None:
+    """Refuse more local worker processes than `max_workers` (``--workers``)."""
+    limit = max_workers()
+    if workers is not None and workers > limit:
+        raise InputError(
+            "--workers",
+            f"at most {limit}, the cores of this machine (set ${MAX_WORKERS_VARIABLE} to "
+            "allow more)",
+            workers,
+        )

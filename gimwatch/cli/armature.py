@@ -9,7 +9,7 @@ import numpy as np
 from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.cli._records import json_text
 from gimwatch.errors import InputError
-from gimwatch.explain.armature import minimal_armature
+from gimwatch.explain.armature import MAX_MATRIX_BYTES, max_configurations, minimal_armature
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, random_configurations
 from gimwatch.stability.step_maps import INTEGRATORS
@@ -75,6 +75,14 @@ def run(args: argparse.Namespace) -> int:
     if not np.isfinite(args.target) or args.target <= 1.0:
         raise InputError("--target", "a number > 1 (κ ≥ 1 always)", args.target)
     robot = load_robot(args.robot, max_nv=DATA_NV_LIMIT)
+    fits = max_configurations(robot.nv)
+    if args.q is None and args.samples > fits:  # refused before K configurations are drawn
+        raise InputError(
+            "--samples",
+            f"at most {fits} for {robot.name} (nv = {robot.nv}: K nv x nv matrices within "
+            f"the {MAX_MATRIX_BYTES >> 20} MiB budget)",
+            args.samples,
+        )
     if args.q is not None:
         qs = user_configuration(robot, args.q, key="--q")[None, :]
     else:

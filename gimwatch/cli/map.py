@@ -8,7 +8,7 @@ import sys
 import numpy as np
 from tqdm import tqdm
 
-from gimwatch.cli._format import positive_int
+from gimwatch.cli._format import check_workers, positive_int
 from gimwatch.errors import InputError
 from gimwatch.explain.map_files import write_map, write_trajectory_metrics
 from gimwatch.explain.maps import MAX_GRID, conditioning_map
@@ -58,6 +58,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError("--joints and --trajectory", "given one at a time (exactly one)", None)
     if args.trajectory is not None and (args.range or args.q):
         raise InputError("--range and --q", "used with --joints only", "--trajectory")
+    if args.scheduler is None:  # as survey: more processes than cores only add memory
+        check_workers(args.workers)
     metrics = [m.strip() for m in args.metrics.split(",")]
     with tqdm(total=1.0, file=sys.stderr, desc="map", leave=False, disable=None) as bar:
 

@@ -4,13 +4,18 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import time
 from pathlib import Path
 
 from gimwatch.cli._batch import expand_specs
-from gimwatch.cli._format import add_base_arguments, non_negative_int, positive_int, table
+from gimwatch.cli._format import (
+    add_base_arguments,
+    check_workers,
+    non_negative_int,
+    positive_int,
+    table,
+)
 from gimwatch.cli._signals import LATCH, fault_pause
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.output.folders import Reservation
@@ -86,34 +91,10 @@ def _positive_seconds(text: str) -> float:
     return value
 
 
-#: Local worker processes allowed above the cores (``$GIMWATCH_MAX_WORKERS`` overrides):
-#: each holds a Pinocchio model and its Data, and more than the cores only adds memory.
-MAX_WORKERS_VARIABLE = "GIMWATCH_MAX_WORKERS"
-
-
-def max_workers() -> int:
-    """The most local worker processes: the cores this process may run on, or the variable."""
-    text = os.environ.get(MAX_WORKERS_VARIABLE, "").strip()
-    if text:
-        if not text.isdigit() or int(text) < 1:
-            raise InputError(f"${MAX_WORKERS_VARIABLE}", "a positive integer", text)
-        return int(text)
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
-
-
 def _check_budgets(args: argparse.Namespace) -> None:
     """Workers within the cores, trajectories within the step budget, before any work."""
-    limit = max_workers()
-    if args.workers is not None and args.scheduler is None and args.workers > limit:
-        raise InputError(
-            "--workers",
-            f"at most {limit}, the cores of this machine (set ${MAX_WORKERS_VARIABLE} to "
-            "allow more)",
-            args.workers,
-        )
+    if args.scheduler is None:
+        check_workers(args.workers)
     dt = TrajectorySettings.dt_s
     if args.trajectory and args.duration / dt > DEFAULT_MAX_STEPS:
         raise InputError(

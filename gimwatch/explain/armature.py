@@ -38,9 +38,51 @@ from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
 
-__all__ = ["ArmaturePlan", "least_total", "minimal_armature"]
+__all__ = [
+    "MAX_MATRIX_BYTES",
+    "ArmaturePlan",
+    "least_total",
+    "max_configurations",
+    "minimal_armature",
+]
 
 MAX_CUTS = 500
+#: The memory the K matrices M(q_k) kept by the cutting planes may take (float64): 1 GiB.
+MAX_MATRIX_BYTES = 1 << 30
+
+
+def max_configurations(nv: int) -> int:
+    """The most configurations whose K nv x nv float64 matrices fit in `MAX_MATRIX_BYTES`."""
+    return max(1, MAX_MATRIX_BYTES // (8 * max(nv, 1) ** 2))
+
+
+def _check_inputs(robot: Robot, qs: np.ndarray, target: float, margin: float) -> None:
+    if not np.isfinite(target) or target <= 1.0:
+        raise InputError("target", "a number > 1 (κ ≥ 1 always)", target)
+    if not (np.isfinite(margin) and margin >= 0):
+        raise InputError(
+            "margin", "a finite number >= 0 (a negative one misses the target)", margin
+        )
+    if robot.floating:
+        raise InputError("the robot", "fixed-base (no armature on a free-flyer)", robot.name)
+    for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
+        if "FreeFlyer" in joint.shortname():  # a file's own free joint, as gimwatch's
+            raise InputError(
+                f"joint '{name}' of {robot.name}",
+                "a joint that can take armature, not a free joint (its 6 DoF move a "
+                "floating body, no rotor)",
+                "free",
+            )
+    if qs.shape[0] == 0:
+        raise InputError("configurations", "at least one configuration", "none")
+    fits = max_configurations(robot.nv)
+    if qs.shape[0] > fits:
+        raise InputError(
+            "configurations",
+            f"at most {fits} for nv = {robot.nv} (K nv x nv float64 matrices within the "
+            f"{MAX_MATRIX_BYTES >> 20} MiB budget)",
+            qs.shape[0],
+        )
 
 
 @dataclass(frozen=True)
@@ -174,18 +216,19 @@ def minimal_armature(
         per_joint: One value per coordinate minimising the total (cutting planes), instead
             of one uniform value (closed form).
         rtol: Relative optimality gap at which the cutting planes stop (per joint).
-        margin: Relative amount the answer is raised so that float64 meets the target.
+        margin: Relative amount the answer is raised so that float64 meets the target
+            (finite, ≥ 0).
 
     Raises:
-        InputError: target ≤ 1 or not finite, a floating base, or bad configurations.
+        InputError: target ≤ 1 or not finite, a negative or NaN margin, a floating base or a
+            free joint, no configurations, more than `max_configurations` of them, or bad
+            configurations.
     """
-    if not np.isfinite(target) or target <= 1.0:
-        raise InputError("--target", "a number > 1 (κ ≥ 1 always)", target)
-    if robot.floating:
-        raise InputError("the robot", "fixed-base (no armature on a free-flyer)", robot.name)
     if not 0 < rtol < 1:
         raise InputError("rtol", "in (0, 1)", rtol)
-    qs = np.atleast_2d(np.asarray(configurations, dtype=float))
+    qs = np.asarray(configurations, dtype=float)
+    qs = qs.reshape(0, robot.nq) if qs.size == 0 else np.atleast_2d(qs)
+    _check_inputs(robot, qs, target, margin)
     qs = np.array([as_configuration(robot, q) for q in qs])
     model, data = robot.model, robot.new_data()
     Ms = [check_robot_gim(robot, np.array(pin.crba(model, data, q))) for q in qs]

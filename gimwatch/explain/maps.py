@@ -55,6 +55,8 @@ __all__ = [
 MAX_GRID = 2000
 #: Configurations per chunk of work (rows are grouped up to about this many points).
 CHUNK_POINTS = 4000
+#: The most memory the dense matrices M(q) of one block of configurations take (float64).
+MATRIX_BLOCK_BYTES = 256 << 20
 
 
 def scalar_metrics(path: str) -> tuple[str, ...]:
@@ -138,6 +140,18 @@ def metrics_at(spec: str, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -
         return out
     robot = _robot(spec)
     data = robot.new_data()
+    # K dense matrices at once: at most MATRIX_BLOCK_BYTES of them (a 4,000-point chunk of
+    # a 400-DoF robot would hold 5 GB)
+    block = max(1, MATRIX_BLOCK_BYTES // (8 * robot.nv**2))
+    for start in range(0, len(qs), block):
+        part = slice(start, start + block)
+        out[:, part] = _dense_metrics(robot, data, qs[part], metrics)
+    return out
+
+
+def _dense_metrics(robot, data, qs: np.ndarray, metrics: tuple[str, ...]) -> np.ndarray:
+    """The metrics at ``qs`` from Pinocchio's dense M, all of the block's M held at once."""
+    out = np.full((len(metrics), len(qs)), np.nan)
     Ms = np.array([pin.crba(robot.model, data, q) for q in qs])
     diagonal = np.diagonal(Ms, axis1=1, axis2=2)
     for row in diagonal[np.any(~(diagonal > 0), axis=1)][:1]:  # M singular: say which joints
@@ -305,6 +319,22 @@ def _grid_chunk(spec, path, axes, base_q, x, y_rows, metrics) -> np.ndarray:
     return values
 
 
+def _numbers(value, name: str) -> np.ndarray:
+    """``value`` as a float array, or one line naming ``name`` (not NumPy's ValueError)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(name, "numbers", value) from None
+
+
+def _check_ranges(ranges) -> list[tuple[float, float]]:
+    """Two (lower, upper) pairs as floats, or one line (a wrong shape, text, a scalar)."""
+    limits = _numbers(ranges, "--range")
+    if limits.shape != (2, 2):
+        raise InputError("--range", "two (lower, upper) pairs, one per joint", ranges)
+    return [(float(lo), float(hi)) for lo, hi in limits]
+
+
 def conditioning_map(
     spec: str,
     joints: Sequence[str],
@@ -342,12 +372,14 @@ def conditioning_map(
     metrics = check_metrics(list(metrics), path)
     name, axes, units, limits, base_q = map_axes(spec, path, joints)
     if ranges is not None:
-        limits = [tuple(map(float, r)) for r in ranges]
+        limits = _check_ranges(ranges)
         for joint, (lo, hi) in zip(joints, limits, strict=True):
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                 raise InputError("--range", "finite lower < upper", (joint, lo, hi))
+            if not math.isfinite(hi - lo):  # the grid's steps would overflow to inf
+                raise InputError("--range", "a span upper - lower below 1.8e308", (joint, lo, hi))
     if q is not None:
-        base_q = checked_configurations(spec, path, np.asarray(q, dtype=float).ravel()[None, :])[0]
+        base_q = checked_configurations(spec, path, _numbers(q, "q").ravel()[None, :])[0]
     x = np.linspace(*limits[0], grid)
     y = np.linspace(*limits[1], grid)
     rows = max(1, CHUNK_POINTS // grid)

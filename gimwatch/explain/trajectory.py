@@ -29,10 +29,19 @@ from gimwatch.explain.maps import (
 from gimwatch.metrics.analyze import choose_path
 from gimwatch.survey.sweep import Task
 
-__all__ = ["MAX_SAMPLES", "TrajectoryMetrics", "read_trajectory_csv", "trajectory_metrics"]
+__all__ = [
+    "MAX_LINE_CHARS",
+    "MAX_SAMPLES",
+    "TrajectoryMetrics",
+    "read_trajectory_csv",
+    "trajectory_metrics",
+]
 
 #: Samples a trajectory file may hold.
 MAX_SAMPLES = 10_000_000
+#: Characters a line may hold per column (a float printed by NumPy takes at most 24).
+MAX_LINE_CHARS = 64
+_BLOCK = 65536  # rows stored per block while the file streams
 _TIME = ("t", "time", "time_s")
 
 
@@ -46,51 +55,90 @@ def _number(text: str, path: Path, line: int, column: int) -> float:
     return value
 
 
+def _lines(stream, path: Path, width: int):
+    """The file's lines, each refused past `MAX_LINE_CHARS` per column before it is kept."""
+    limit = MAX_LINE_CHARS * max(width, 1)
+    line = 0
+    while True:
+        text = stream.readline(limit + 1)
+        if not text:
+            return
+        line += 1
+        if len(text) > limit:
+            raise InputError(f"{path}:{line}", f"a line of at most {limit} characters", "longer")
+        yield text
+
+
 def read_trajectory_csv(
     path: str | Path, names: Sequence[str]
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """(time or None, q array (K, nq)) from a CSV file of configurations.
+
+    The file is streamed: the row limit (`MAX_SAMPLES`) and the line length are checked as
+    rows arrive, before more is read, and rows are stored as floats in blocks.
 
     Args:
         path: The CSV file.
         names: The robot's configuration coordinate names (their count is nq).
 
     Raises:
-        InputError: A missing or unreadable file, no rows, a row of the wrong length, a cell
-            that is not a finite number, unknown column names.
+        InputError: A missing or unreadable file, no rows, more than `MAX_SAMPLES` rows, a
+            line too long, a row of the wrong length, a cell that is not a finite number,
+            unknown column names.
     """
     path = Path(path)
+    names = list(names)
+    blocks: list[np.ndarray] = []
+    count, has_time, width = 0, False, len(names)
     try:
         with path.open(newline="", encoding="utf-8") as stream:
-            rows = [(i + 1, row) for i, row in enumerate(csv.reader(stream)) if row]
+            reader = csv.reader(_lines(stream, path, len(names) + 1))
+            first = True
+            for row in reader:
+                if not row:
+                    continue
+                line = reader.line_num
+                if first:
+                    first = False
+                    has_time = row[0].strip().lower() in _TIME
+                    width = len(names) + has_time
+                    if _is_header(row, names, has_time, path):
+                        continue
+                if count == MAX_SAMPLES:
+                    raise InputError(
+                        "--trajectory", f"at most {MAX_SAMPLES} rows", f"more ({path})"
+                    )
+                if len(row) != width:
+                    raise InputError(f"{path}:{line}", f"{width} columns", len(row))
+                if count % _BLOCK == 0:
+                    blocks.append(np.empty((_BLOCK, width)))
+                blocks[-1][count % _BLOCK] = [
+                    _number(cell, path, line, c) for c, cell in enumerate(row)
+                ]
+                count += 1
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError("--trajectory", "a readable CSV file", str(path), hint=str(exc)) from None
-    if not rows:
+    if count == 0:
         raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
-    header = [cell.strip() for cell in rows[0][1]]
-    has_time = header[0].lower() in _TIME
+    values = np.concatenate(blocks)[:count] if len(blocks) > 1 else blocks[0][:count]
+    return (values[:, 0], values[:, 1:]) if has_time else (None, values)
+
+
+def _is_header(row: list[str], names: list[str], has_time: bool, path: Path) -> bool:
+    """Whether the first row is a header (its first cell is no number); checks its names."""
+    header = [cell.strip() for cell in row]
     try:
         float(header[0])
+        return False
     except ValueError:  # a first cell that is no number: a header row
         columns = header[1:] if has_time else header
-        if columns != list(names):
+        if columns != names:
             raise InputError(
                 f"{path}:1",
                 f"column names {', '.join(names)} (the robot's q order)",
                 ", ".join(columns),
             ) from None
-        rows = rows[1:]
-    if not rows:
-        raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
-    if len(rows) > MAX_SAMPLES:
-        raise InputError("--trajectory", f"at most {MAX_SAMPLES} rows", len(rows))
-    width = len(names) + has_time
-    values = np.empty((len(rows), width))
-    for k, (line, row) in enumerate(rows):
-        if len(row) != width:
-            raise InputError(f"{path}:{line}", f"{width} columns", len(row))
-        values[k] = [_number(cell, path, line, c) for c, cell in enumerate(row)]
-    return (values[:, 0], values[:, 1:]) if has_time else (None, values)
+        return True
 
 
 @dataclass(frozen=True)

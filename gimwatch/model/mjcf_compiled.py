@@ -62,13 +62,25 @@ def import_mujoco(purpose: str = "MJCF reading"):
 def compile_mjcf(path: str, *, floating: bool = False):
     """MuJoCo's compiled model of the MJCF file ``path`` (includes resolved by MuJoCo).
 
+    The compile runs in a child process bounded in time and memory
+    (`gimwatch.model.mjcf_sandbox`): an MJCF that expands while MuJoCo reads it is refused,
+    not waited for.
+
     Args:
         path: The MJCF file.
         floating: Give the first body of the world a free joint when it has no joint.
 
     Raises:
-        URDFError: MuJoCo refuses the file (its message, with the element, is kept).
+        URDFError: MuJoCo refuses the file (its message, with the element, is kept), or the
+            compile runs past its time or memory bound.
     """
+    from gimwatch.model.mjcf_sandbox import compile_in_child
+
+    import_mujoco()
+    return compile_in_child(lambda: _compile(path, floating), str(path), mujoco_message)
+
+
+def _compile(path: str, floating: bool):
     mujoco = import_mujoco()
     # MuJoCo's warnings go to a handler of ours: its default one prints them and writes
     # MUJOCO_LOG.TXT into the working folder. Its solver's Python warnings on a model that
@@ -82,8 +94,6 @@ def compile_mjcf(path: str, *, floating: bool = False):
             if floating:
                 _add_free_joint(spec, path)
             return spec.compile()
-    except ValueError as exc:
-        raise URDFError(str(path), f"MuJoCo refuses this MJCF: {mujoco_message(exc)}") from None
     finally:
         mujoco.set_mju_user_warning(previous)
 

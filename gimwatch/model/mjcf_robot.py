@@ -5,7 +5,9 @@
    budgets: `MAX_MJCF_BYTES`, ``$GIMWATCH_MAX_LINKS`` bodies)
    and bodies nested deeper than `MAX_BODY_DEPTH` (MuJoCo's XML reader stops at about
    500 nested elements).
-2. MuJoCo compiles the file; a refusal is one line with MuJoCo's message (element, line).
+2. MuJoCo compiles the file in a child process bounded in time and memory
+   (`gimwatch.model.mjcf_sandbox`); a refusal is one line with MuJoCo's message (element,
+   line). The compiled body count is held to the same budget as the text's.
 3. `build_pinocchio_model` builds the robot; a moving
    subtree without mass is refused; what changes MuJoCo's dynamics but not M (equality
    constraints, tendon armature) is named in one `URDFWarning`.
@@ -52,15 +54,20 @@ def check_mjcf_budget(path: str) -> None:
     ``<include file=...>`` elements name (relative to the main file's folder, as in MuJoCo).
 
     Raises:
-        URDFError: Too many bytes, bodies or levels, naming the file and the limit.
+        URDFError: Too many bytes, bodies or levels, naming the file and the limit, or an
+            include that is not a regular file (a FIFO, a device), refused before it is opened.
     """
     folder = Path(path).parent
     limit, bodies, total = max_links(), 0, 0
     pending, seen = [Path(path)], set()
     while pending:
         current = pending.pop()
-        if current in seen or not current.is_file():
+        if current in seen or not current.exists():
             continue  # MuJoCo names a missing or repeated include itself
+        if not current.is_file():  # stat only: opening a FIFO would wait for a writer
+            raise URDFError(
+                path, f"includes {current.name!r}, which is not a regular file (a FIFO or device?)"
+            )
         seen.add(current)
         total += current.stat().st_size
         if total > MAX_MJCF_BYTES:
@@ -168,6 +175,12 @@ def read_mjcf(path: str, *, floating: bool = False, body: str = "", armature: bo
     """
     check_mjcf_budget(path)
     mj_model = compile_mjcf(path, floating=floating)
+    if mj_model.nbody - 1 > max_links():  # <replicate> and <flexcomp> expand past the text
+        raise URDFError(
+            path,
+            f"compiles to {mj_model.nbody - 1} bodies, more than gimwatch reads ({max_links()}; "
+            "set $GIMWATCH_MAX_LINKS to read more)",
+        )
     joints = subtree_joints(mj_model, body, path)
     _check_values(mj_model, joints, path)
     _check_masses(mj_model, joints, path)

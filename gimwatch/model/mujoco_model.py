@@ -1,8 +1,11 @@
 """A gimwatch robot compiled in MuJoCo, and MuJoCo's M(q) in Pinocchio's coordinates.
 
 MuJoCo (optional extra ``gimwatch[peers]``, imported lazily) is an independent reference
-for M(q): its own parser, its own tree and its own CRBA (``mj_fullM`` after
-``mj_forward``).
+for M(q): its own parser, its own tree and its own CRBA (``mj_fullM`` after the parts of
+``mj_forward`` that M needs: ``mj_kinematics``, ``mj_comPos``, ``mj_tendon`` when tendons have
+armature, ``mj_makeM``). Collision, constraints and flex state are never computed, so a model
+whose contacts overflow its arena (a self-colliding flex at a random pose) still gives M; any
+error MuJoCo raises is one line naming the robot.
 
 * URDF robots: the text is passed with ``<visual>``/``<collision>`` removed (meshes are not
   needed for inertia) and one ``<mujoco><compiler .../></mujoco>`` block that keeps the
@@ -29,11 +32,19 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pinocchio as pin
 
-from gimwatch.errors import InputError, RobotError
+from gimwatch.errors import RobotError
 from gimwatch.model.captured_output import captured_c_output
+from gimwatch.model.mjcf_compiled import import_mujoco
 from gimwatch.model.robots import Robot
 
-__all__ = ["MujocoRefusal", "compile_robot", "compile_urdf", "mass_matrix", "pinocchio_mass_matrix"]
+__all__ = [
+    "MujocoRefusal",
+    "compile_robot",
+    "compile_urdf",
+    "make_mass_matrix",
+    "mass_matrix",
+    "pinocchio_mass_matrix",
+]
 
 #: The compiler settings that keep a URDF's inertias exactly as written.
 EXACT_COMPILER = (
@@ -59,23 +70,13 @@ def _refusal(spec: str, exc: Exception) -> MujocoRefusal:
     return MujocoRefusal(spec, match.group(1) if match else "", reason)
 
 
-def _import_mujoco():
-    try:
-        import mujoco
-    except ImportError:
-        raise InputError(
-            "--peer mujoco", "MuJoCo installed (pip install 'gimwatch[peers]')", "not installed"
-        ) from None
-    return mujoco
-
-
 def compile_urdf(urdf_xml: str, *, floating: bool = False, inertia_floor: float = 0.0, spec=""):
     """Compile URDF text in MuJoCo with exact inertias (see the module docstring).
 
     Raises:
         MujocoRefusal: MuJoCo rejects an inertia (the link and MuJoCo's reason are kept).
     """
-    mujoco = _import_mujoco()
+    mujoco = import_mujoco("MuJoCo as a peer")
     root = ET.fromstring(urdf_xml)
     for parent in root.iter():
         for child in list(parent):
@@ -96,8 +97,8 @@ def compile_urdf(urdf_xml: str, *, floating: bool = False, inertia_floor: float 
             if floating:
                 model_spec.worldbody.first_body().add_freejoint(name="root_joint")
             return model_spec.compile()
-    except ValueError as exc:
-        raise _refusal(spec or "<urdf>", exc) from exc
+    except (ValueError, mujoco.FatalError) as exc:
+        raise _refusal(spec or "<urdf>", exc) from None
 
 
 def compile_robot(robot: Robot):
@@ -110,7 +111,7 @@ def compile_robot(robot: Robot):
         return compile_urdf(robot.urdf_xml, floating=robot.floating, spec=robot.spec)
     from gimwatch.model.mjcf_compiled import compile_mjcf
 
-    _import_mujoco()
+    import_mujoco("MuJoCo as a peer")
     mj_model = compile_mjcf(robot.source, floating=robot.floating)
     if mj_model.ntendon:  # MuJoCo adds tendon armature to M; gimwatch leaves it out (warned)
         mj_model.tendon_armature[:] = 0.0
@@ -146,16 +147,52 @@ def _joint_maps(robot: Robot, mj_model, q: np.ndarray, mj_q: np.ndarray, T: np.n
             raise RobotError(robot.spec, f"joint '{name}' ({kind}) has no MuJoCo counterpart")
 
 
-def mass_matrix(mj_model, mj_q: np.ndarray) -> np.ndarray:
-    """MuJoCo's dense M: ``mj_fullM`` after ``mj_forward`` at ``mj_q`` (zero velocity)."""
+def mass_matrix(mj_model, mj_q: np.ndarray, *, spec: str = "<mujoco>") -> np.ndarray:
+    """MuJoCo's dense M at ``mj_q``: ``mj_fullM`` after what ``mj_makeM`` reads.
+
+    Kinematics, ``mj_comPos`` (composite inertias in the CoM frame) and, when a tendon has
+    armature (its Jᵀ a J enters M), ``mj_tendon``; then ``mj_makeM``. Nothing of collision,
+    constraints or flex deformation: they do not enter M and may run out of arena memory.
+
+    Raises:
+        RobotError: MuJoCo fails (``mujoco.FatalError`` or another error), named for ``spec``.
+    """
     import mujoco
 
-    data = mujoco.MjData(mj_model)
-    data.qpos[:] = mj_q
-    mujoco.mj_forward(mj_model, data)
-    M = np.zeros((mj_model.nv, mj_model.nv))
-    mujoco.mj_fullM(mj_model, data, M)
+    try:
+        data = mujoco.MjData(mj_model)
+        data.qpos[:] = mj_q
+        make_mass_matrix(mj_model, data)
+        M = np.zeros((mj_model.nv, mj_model.nv))
+        mujoco.mj_fullM(mj_model, data, M)
+    except (mujoco.FatalError, ValueError, RuntimeError, MemoryError) as exc:
+        raise RobotError(spec, f"MuJoCo fails computing M: {_first_line(exc)}") from None
     return M
+
+
+def make_mass_matrix(mj_model, data) -> None:
+    """Fill ``data``'s M at ``data.qpos`` with only the stages of ``mj_forward`` M reads.
+
+    Kinematics and ``mj_comPos`` for the composite rigid bodies; ``mj_tendon`` and
+    ``mj_transmission`` only when a tendon or an actuator has armature (their Jᵀ a J enters
+    M); then ``mj_makeM``. Not ``mj_fwdPosition``: its collision stage allocates from the
+    model's arena and fails on a self-colliding flex, and contacts do not enter M.
+    """
+    import mujoco
+
+    mujoco.mj_kinematics(mj_model, data)
+    mujoco.mj_comPos(mj_model, data)
+    tendon = mj_model.ntendon and np.any(np.asarray(mj_model.tendon_armature) != 0)
+    actuator = np.any(np.asarray(getattr(mj_model, "actuator_armature", ())) != 0)
+    if tendon or actuator:
+        mujoco.mj_tendon(mj_model, data)
+        mujoco.mj_transmission(mj_model, data)
+    mujoco.mj_makeM(mj_model, data)
+
+
+def _first_line(exc: Exception) -> str:
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    return lines[0] if lines else type(exc).__name__
 
 
 def pinocchio_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
@@ -173,7 +210,7 @@ def pinocchio_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
     mj_q = np.array(mj_model.qpos0, dtype=float)
     T = np.zeros((mj_model.nv, robot.nv))
     _joint_maps(robot, mj_model, q, mj_q, T)
-    return T.T @ mass_matrix(mj_model, mj_q) @ T
+    return T.T @ mass_matrix(mj_model, mj_q, spec=robot.spec) @ T
 
 
 def _mjcf_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
@@ -187,7 +224,7 @@ def _mjcf_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
         start = int(mj_model.jnt_qposadr[j])
         mj_q[start : start + joint.nq] = qpos[joint.idx_q : joint.idx_q + joint.nq]
         dofs.extend(range(int(mj_model.jnt_dofadr[j]), int(mj_model.jnt_dofadr[j]) + joint.nv))
-    M = mass_matrix(mj_model, mj_q)[np.ix_(dofs, dofs)]
+    M = mass_matrix(mj_model, mj_q, spec=robot.spec)[np.ix_(dofs, dofs)]
     if not robot.mjcf_armature:
         M -= np.diag(np.asarray(mj_model.dof_armature, dtype=float)[dofs])
     T = velocity_map(robot.model, q)

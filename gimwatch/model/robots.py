@@ -61,6 +61,7 @@ __all__ = [
     "chain_robot",
     "check_random_budget",
     "default_floating",
+    "display_name",
     "example_robot_names",
     "is_mjcf",
     "load_robot",
@@ -218,6 +219,15 @@ def _too_large(spec: str, nv: int) -> RobotError:
     )
 
 
+def display_name(text: str) -> str:
+    r"""``text`` printable as UTF-8, whatever bytes a file name holds.
+
+    Bytes of a file name that are not UTF-8 (Python keeps them as lone surrogates) become
+    ``\xNN``, so figure titles, tables and JSON never fail on them.
+    """
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
 def _too_deep(spec: str) -> RobotError:
     return RobotError(
         spec, f"Pinocchio's URDF parser reads at most {MAX_TREE_DEPTH} links in a chain"
@@ -328,7 +338,7 @@ def load_robot(
             warnings.warn(f"{text}: {EXAMPLE_ROBOT_NOTES[text]}", ExampleRobotWarning, stacklevel=2)
     elif text.lower().endswith((".urdf", ".xml")) or Path(text).exists() or "/" in text:
         path = Path(text)
-        xml, source, name = read_robot_file(path), str(path), path.stem
+        xml, source, name = read_robot_file(path), str(path), display_name(path.stem)
         if is_mjcf(xml):
             return _mjcf_robot(xml, source, name, text, floating, body, armature)
     else:

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from gimwatch.errors import InputError
+from gimwatch.survey.scheduler_address import probe_scheduler
 
 __all__ = ["POOL_WORTH_S", "SweepOutcome", "Task", "run_sweep", "run_task"]
 
@@ -125,37 +126,14 @@ def _dask_client(scheduler: str):
             n_workers=os.cpu_count() or 1, threads_per_worker=1, dashboard_address=None
         )
         return Client(cluster), cluster
-    _check_address(scheduler)  # a malformed address fails now, not after a 10 s timeout
+    # a malformed address, a silent port or an HTTP server fail now, in one line
+    probe_scheduler(scheduler)
     try:
         return Client(scheduler, timeout="10s"), None
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(
             "--scheduler", "the address of a running Dask scheduler or 'local'", scheduler
         ) from exc
-
-
-def _check_address(scheduler: str) -> None:
-    """Refuse what is not ``[scheme://]host:port`` (port 1..65535) or ``inproc://...``."""
-    from urllib.parse import urlsplit
-
-    parts = urlsplit(scheduler if "://" in scheduler else f"tcp://{scheduler}")
-    try:
-        port = parts.port
-    except ValueError:  # out of range or not a number
-        port = None
-    if parts.scheme == "inproc":  # inproc://host/pid/n, a scheduler in this process
-        well_formed = bool(parts.hostname)
-    else:
-        well_formed = (
-            parts.scheme in ("tcp", "tls", "ws", "wss", "ucx")
-            and bool(parts.hostname)
-            and bool(port)
-            and parts.path in ("", "/")
-        )
-    if not well_formed:
-        raise InputError(
-            "--scheduler", "'local' or a Dask scheduler address tcp://host:port", scheduler
-        )
 
 
 def _run_dask(tasks, scheduler, done, results) -> None:

@@ -38,6 +38,7 @@ from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import check_gim
 from gimwatch.model.denoc_input import urdf_of_model
 from gimwatch.model.mjcf_compiled import import_mujoco
+from gimwatch.model.mujoco_model import make_mass_matrix
 from gimwatch.model.robots import Robot
 
 __all__ = [
@@ -223,7 +224,6 @@ class MujocoSource:
         from gimwatch.model.kernels import positive_ratio  # numba: only for a MuJoCo watch
 
         self._positive_ratio = positive_ratio
-        self._light = not extra  # kinematics + CRB suffice for M at a given q
         self._own = None
         self._order: np.ndarray | None = None
         self._free: list[tuple[int, int]] = []  # (first linear dof in output, qpos of quat)
@@ -261,6 +261,14 @@ class MujocoSource:
             if j < 0:
                 raise InputError(
                     "robot", "a model whose joints MuJoCo has too (by name)", f"joint '{name}'"
+                )
+            expected = _mujoco_joint_type(kind)
+            if expected is not None and int(model.jnt_type[j]) != expected:
+                found = mujoco.mjtJoint(int(model.jnt_type[j])).name.removeprefix("mjJNT_")
+                raise InputError(
+                    f"joint '{name}'",
+                    f"a MuJoCo {_TYPE_NAMES[expected]} joint like the robot's ({kind})",
+                    found.lower(),
                 )
             width = 6 if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE else None
             dofs = int(np.sum(model.dof_jntid == j)) if width is None else width
@@ -305,12 +313,7 @@ class MujocoSource:
             self._own = mujoco.MjData(model)
         data = self._own
         data.qpos[:] = qpos
-        if self._light:
-            mujoco.mj_kinematics(model, data)
-            mujoco.mj_comPos(model, data)
-            mujoco.mj_makeM(model, data)
-        else:  # tendon/actuator armature need the transmissions too
-            mujoco.mj_fwdPosition(model, data)
+        make_mass_matrix(model, data)  # no collision stage: contacts may overflow the arena
         return data
 
     def gim(self, q=None, out: np.ndarray | None = None) -> np.ndarray:
@@ -354,3 +357,20 @@ def _rotation(quaternion_wxyz: np.ndarray) -> np.ndarray:
             [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
         ]
     )
+
+
+#: MuJoCo's joint types (mjtJoint) by their numbers, as MJCF names them.
+_TYPE_NAMES = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
+
+
+def _mujoco_joint_type(kind: str) -> int | None:
+    """MuJoCo's joint type matching a Pinocchio joint's shortname, None if none is known."""
+    if "FreeFlyer" in kind:
+        return 0
+    if "Spherical" in kind:
+        return 1
+    if "Prismatic" in kind or kind in ("JointModelPX", "JointModelPY", "JointModelPZ"):
+        return 2
+    if "Revolute" in kind or kind.removeprefix("JointModelR").removeprefix("UB") in ("X", "Y", "Z"):
+        return 3
+    return None
