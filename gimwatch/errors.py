@@ -42,6 +42,10 @@ class InputError(GimwatchError, ValueError):
             message += f" ({hint})"
         super().__init__(message)
 
+    def renamed(self, name: str) -> InputError:
+        """The same error about ``name`` (a CLI flag for a library parameter)."""
+        return type(self)(name, self.rule, self.value, hint=self.hint)
+
 
 class URDFError(GimwatchError):
     """A URDF file (or string) that cannot be used, with the element at fault."""

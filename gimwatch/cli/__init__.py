@@ -22,7 +22,7 @@ from types import ModuleType
 
 from gimwatch._version import __version__
 from gimwatch.cli._signals import LATCH, fault_pause
-from gimwatch.errors import GimwatchError
+from gimwatch.errors import GimwatchError, InputError
 from gimwatch.suggest import did_you_mean
 
 __all__ = ["get_argument_parser", "main"]
@@ -165,7 +165,7 @@ def get_argument_parser(command: str | None = None) -> argparse.ArgumentParser:
             formatter_class=HelpFormatter,
         )
         module.add_arguments(parser_)
-        parser_.set_defaults(run=module.run)
+        parser_.set_defaults(run=module.run, parameter_options=parameter_options(parser_, module))
     return parser
 
 
@@ -242,4 +242,25 @@ def _run(argv: Sequence[str] | None) -> int:
     # GIMs are small dense matrices: multi-threaded OpenBLAS makes their eigen-solves
     # 20-40x slower on 2 cores, so the command line keeps BLAS on one thread.
     with threadpool_limits(limits=1, user_api="blas"):
-        return int(args.run(args))
+        try:
+            return int(args.run(args))
+        except InputError as exc:  # the library names its parameter; the user typed a flag
+            flag = getattr(args, "parameter_options", {}).get(exc.name)
+            if flag is None:
+                raise
+            raise exc.renamed(flag) from exc
+
+
+def parameter_options(parser: argparse.ArgumentParser, module: ModuleType) -> dict[str, str]:
+    """Library parameter -> the command's option that sets it (``grid`` -> ``--grid``).
+
+    By destination (``grid``) and its plural (``ranges`` for ``--range``), and whatever the
+    command module declares in ``PARAMETER_OPTIONS`` (``path`` -> ``--trajectory``).
+    """
+    options: dict[str, str] = {}
+    for action in parser._actions:  # argparse lists a parser's actions nowhere public
+        if action.option_strings and action.dest != "help":
+            flag = max(action.option_strings, key=len)
+            options.setdefault(f"{action.dest}s", flag)
+            options[action.dest] = flag
+    return {**options, **getattr(module, "PARAMETER_OPTIONS", {})}

@@ -73,10 +73,10 @@ def check_metrics(metrics: Sequence[str], path: str) -> tuple[str, ...]:
         if name not in allowed:
             hint = did_you_mean(name, allowed).removeprefix("; ")
             raise InputError(
-                "--metrics", f"among {', '.join(allowed)} on the {path} path", name, hint=hint
+                "metrics", f"among {', '.join(allowed)} on the {path} path", name, hint=hint
             )
     if not metrics:
-        raise InputError("--metrics", "at least one metric", list(metrics))
+        raise InputError("metrics", "at least one metric", list(metrics))
     return tuple(metrics)
 
 
@@ -223,7 +223,7 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
         InputError: Unknown joints, a joint named twice, or a joint not of one coordinate.
     """
     if len(joints) != 2 or joints[0] == joints[1]:
-        raise InputError("--joints", "two different joint names", list(joints))
+        raise InputError("joints", "two different joint names", list(joints))
     chain = parse_chain_spec(spec)
     if path == "denoc" and chain is not None:
         model, name = _linear_model(spec)
@@ -257,9 +257,9 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
     for joint in joints:
         if joint not in names:
             hint = did_you_mean(joint, names).removeprefix("; ")
-            raise InputError("--joints", f"joints of {name}", joint, hint=hint)
+            raise InputError("joints", f"joints of {name}", joint, hint=hint)
         if joint not in index:
-            raise InputError("--joints", "joints of one coordinate (revolute or prismatic)", joint)
+            raise InputError("joints", "joints of one coordinate (revolute or prismatic)", joint)
     return (
         name,
         [index[j] for j in joints],
@@ -329,9 +329,9 @@ def _numbers(value, name: str) -> np.ndarray:
 
 def _check_ranges(ranges) -> list[tuple[float, float]]:
     """Two (lower, upper) pairs as floats, or one line (a wrong shape, text, a scalar)."""
-    limits = _numbers(ranges, "--range")
+    limits = _numbers(ranges, "ranges")
     if limits.shape != (2, 2):
-        raise InputError("--range", "two (lower, upper) pairs, one per joint", ranges)
+        raise InputError("ranges", "two (lower, upper) pairs, one per joint", ranges)
     return [(float(lo), float(hi)) for lo, hi in limits]
 
 
@@ -367,7 +367,7 @@ def conditioning_map(
         or not isinstance(grid, (int, np.integer))
         or not 2 <= grid <= MAX_GRID
     ):
-        raise InputError("--grid", f"an integer from 2 to {MAX_GRID}", grid)
+        raise InputError("grid", f"an integer from 2 to {MAX_GRID}", grid)
     path = choose_path(spec, backend=backend)
     metrics = check_metrics(list(metrics), path)
     name, axes, units, limits, base_q = map_axes(spec, path, joints)
@@ -375,9 +375,9 @@ def conditioning_map(
         limits = _check_ranges(ranges)
         for joint, (lo, hi) in zip(joints, limits, strict=True):
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise InputError("--range", "finite lower < upper", (joint, lo, hi))
+                raise InputError("ranges", "finite lower < upper", (joint, lo, hi))
             if not math.isfinite(hi - lo):  # the grid's steps would overflow to inf
-                raise InputError("--range", "a span upper - lower below 1.8e308", (joint, lo, hi))
+                raise InputError("ranges", "a span upper - lower below 1.8e308", (joint, lo, hi))
     if q is not None:
         base_q = checked_configurations(spec, path, _numbers(q, "q").ravel()[None, :])[0]
     x = np.linspace(*limits[0], grid)

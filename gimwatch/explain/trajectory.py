@@ -105,9 +105,7 @@ def read_trajectory_csv(
                     if _is_header(row, names, has_time, path):
                         continue
                 if count == MAX_SAMPLES:
-                    raise InputError(
-                        "--trajectory", f"at most {MAX_SAMPLES} rows", f"more ({path})"
-                    )
+                    raise InputError("path", f"at most {MAX_SAMPLES} rows", f"more ({path})")
                 if len(row) != width:
                     raise InputError(f"{path}:{line}", f"{width} columns", len(row))
                 if count % _BLOCK == 0:
@@ -117,9 +115,9 @@ def read_trajectory_csv(
                 ]
                 count += 1
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise InputError("--trajectory", "a readable CSV file", str(path), hint=str(exc)) from None
+        raise InputError("path", "a readable CSV file", str(path), hint=str(exc)) from None
     if count == 0:
-        raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
+        raise InputError("path", "a CSV file with at least one row of q", str(path))
     values = np.concatenate(blocks)[:count] if len(blocks) > 1 else blocks[0][:count]
     return (values[:, 0], values[:, 1:]) if has_time else (None, values)
 

@@ -33,6 +33,7 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError, URDFError
 from gimwatch.model.captured_output import captured_c_output
+from gimwatch.suggest import did_you_mean
 
 __all__ = [
     "MUJOCO_INSTALL",
@@ -137,7 +138,12 @@ def _body_id(mj_model, body: str, source: str) -> int:
 
     index = mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_BODY, body)
     if index <= 0:
-        raise URDFError(source, f"has no body named {body!r} to select (--body)")
+        names = [
+            mujoco.mj_id2name(mj_model, mujoco.mjtObj.mjOBJ_BODY, b) or ""
+            for b in range(1, mj_model.nbody)
+        ]
+        hint = did_you_mean(body, names).removeprefix("; ")
+        raise InputError("body", f"the name of a body of {source}", body, hint=hint)
     return index
 
 

@@ -346,7 +346,7 @@ def load_robot(
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
     if body:
-        raise InputError("--body", "given only with an MJCF file", body)
+        raise InputError("body", "given only with an MJCF file", body)
     model, xml = _build_model(xml, source, floating)
     return _robot(
         model, name=name, spec=text, urdf_xml=xml, source=source, floating=floating, chain=chain

@@ -88,7 +88,7 @@ def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
     return tuple(names)
 
 
-def check_random_budget(count: int, nv: int, *, option: str = "--random") -> None:
+def check_random_budget(count: int, nv: int, *, option: str = "random") -> None:
     """Refuse ``count`` random configurations of ``nv`` coordinates beyond the work budget.
 
     The budget is count x nv <= 2,000,000 (``$GIMWATCH_MAX_RANDOM_WORK`` overrides it); it

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gimwatch.errors import ConditioningError, GimwatchError, SceneError
+from gimwatch.errors import ConditioningError, GimwatchError, InputError, SceneError
 from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import (
@@ -45,7 +45,7 @@ def load_scene_robot(scene) -> Robot:
     except SceneError:
         raise
     except GimwatchError as exc:
-        key = "body" if scene.robot.body and "--body" in str(exc) else "robot"
+        key = "body" if isinstance(exc, InputError) and exc.name == "body" else "robot"
         raise scene.error(key, str(exc)) from exc
 
 

@@ -28,7 +28,7 @@ HANDSHAKE_SECONDS = 10.0
 #: The largest first frame taken for a Dask handshake (a real one is under 1 KiB).
 MAX_HANDSHAKE_BYTES = 1 << 20
 _RULE = "'local' or a Dask scheduler address tcp://host:port"
-_NAME = "--scheduler"  # the message tests/test_bad_inputs.py holds
+_NAME = "scheduler"  # the CLI shows it as --scheduler
 
 
 def check_address(scheduler: str) -> None:

@@ -116,7 +116,7 @@ def _dask_client(scheduler: str):
         from distributed import Client, LocalCluster
     except ImportError:
         raise InputError(
-            "--scheduler",
+            "scheduler",
             "usable only with Dask installed",
             scheduler,
             hint="pip install 'gimwatch[dask]'",
@@ -132,7 +132,7 @@ def _dask_client(scheduler: str):
         return Client(scheduler, timeout="10s"), None
     except (OSError, TimeoutError, ValueError) as exc:
         raise InputError(
-            "--scheduler", "the address of a running Dask scheduler or 'local'", scheduler
+            "scheduler", "the address of a running Dask scheduler or 'local'", scheduler
         ) from exc
 
 
