@@ -27,7 +27,7 @@ test: setup
 # console transcripts are run by tests/test_docs.py; its API pages are read by
 # tests/test_api_site.py.
 docs: setup
-	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
 
 # Regenerates benchmarks/survey/ and the table of docs/findings/survey.md
 .PHONY: survey
