@@ -98,7 +98,8 @@ def _committed_text_files() -> list[Path]:
 def test_no_committed_link_holds_an_absolute_path_of_the_writing_machine():
     found = []
     for path in _committed_text_files():
-        for number, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+        text = path.read_text(encoding="utf-8", errors="replace")
+        for number, line in enumerate(text.splitlines(), 1):
             targets = MARKDOWN_LINK.findall(line) + CODE_PATH.findall(line)
             for target in targets:
                 if target.startswith(MACHINE_ROOTS):
