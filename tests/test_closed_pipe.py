@@ -81,3 +81,15 @@ def test_a_failed_check_keeps_its_status_on_a_closed_pipe(tmp_path):
     """The status is that of the work: an unknown robot stays 2, not 0 nor 1."""
     done = run_into_closed_pipe(["analyze", "no-such-robot"], tmp_path)
     assert done.returncode == 2 and "Traceback" not in done.stderr
+
+
+def test_crosscheck_table_says_its_columns_are_relative_errors(tmp_path):
+    done = subprocess.run(
+        [sys.executable, "-m", "gimwatch", "crosscheck", "chain:3", "--samples", "1"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert done.returncode == 0, done.stderr
+    assert "columns GIM to pivots: worst relative error" in done.stdout
