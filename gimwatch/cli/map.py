@@ -91,5 +91,5 @@ def run(args: argparse.Namespace) -> int:
     for metric, values in result.values.items():
         low, high = np.nanmin(values), np.nanmax(values)
         print(f"{metric}: {low:.6g} to {high:.6g}")
-    print(f"wrote {written.parent}")
+    print(f"wrote {written.parent}", file=sys.stderr)
     return 130 if result.interrupted else 0

@@ -3,6 +3,8 @@
 The file has one row per sample and ``nq`` numeric columns in Pinocchio's q order; a first
 row of column names is allowed (then the names must be the robot's coordinate names, e.g.
 ``shoulder_pan_joint``, or ``t`` plus them: a first ``t``/``time`` column is kept as time).
+``simulate``'s trajectory.csv is read as it is: its ``q:<name>`` columns are the q, ``t`` the
+time, and its ``v:<name>`` columns (or a watch's metric columns) are left out.
 Every error names the file, the line and what is wrong. The metrics run through
 `gimwatch.explain.maps.metrics_at` in chunks, as maps do.
 """
@@ -67,29 +69,64 @@ def read_trajectory_csv(
     if not rows:
         raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
     header = [cell.strip() for cell in rows[0][1]]
-    has_time = header[0].lower() in _TIME
     try:
         float(header[0])
     except ValueError:  # a first cell that is no number: a header row
-        columns = header[1:] if has_time else header
-        if columns != list(names):
-            raise InputError(
-                f"{path}:1",
-                f"column names {', '.join(names)} (the robot's q order)",
-                ", ".join(columns),
-            ) from None
-        rows = rows[1:]
+        return _read_named_columns(path, header, rows[1:], list(names))
+    if len(rows) > MAX_SAMPLES:
+        raise InputError("--trajectory", f"at most {MAX_SAMPLES} rows", len(rows))
+    return None, _values(path, rows, range(len(names)), len(names))
+
+
+def _read_named_columns(
+    path: Path, header: list[str], rows: list, names: list[str]
+) -> tuple[np.ndarray | None, np.ndarray]:
+    """The time and q columns of a CSV with a header row.
+
+    Two layouts: bare coordinate names (``t`` first optionally), or ``q:<name>`` columns as
+    ``simulate``'s trajectory.csv and a watch's saved series (``to_dataframe``) have them; other
+    columns there (``v:<name>``, energy, watched metrics) are left out.
+    """
     if not rows:
         raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
     if len(rows) > MAX_SAMPLES:
         raise InputError("--trajectory", f"at most {MAX_SAMPLES} rows", len(rows))
-    width = len(names) + has_time
-    values = np.empty((len(rows), width))
+    time_column = next((i for i, h in enumerate(header) if h.lower() in _TIME), None)
+    prefixed = [i for i, h in enumerate(header) if h.startswith("q:")]
+    if prefixed:
+        given = [header[i].removeprefix("q:") for i in prefixed]
+        positional = [f"q{i}" for i in range(len(names))]  # simulate's names when nq != nv
+        if given not in (names, positional):
+            raise InputError(
+                f"{path}:1",
+                f"q:<name> columns {', '.join(names)} (the robot's q order)",
+                ", ".join(header[i] for i in prefixed),
+            )
+        q_columns = prefixed
+    else:
+        columns = [h for i, h in enumerate(header) if i != time_column]
+        if time_column not in (None, 0) or columns != names:
+            raise InputError(
+                f"{path}:1",
+                f"column names {', '.join(names)} (the robot's q order) or q:<name> columns",
+                ", ".join(header),
+            )
+        q_columns = [i for i in range(len(header)) if i != time_column]
+    wanted = ([time_column] if time_column is not None else []) + q_columns
+    values = _values(path, rows, wanted, len(header))
+    if time_column is None:
+        return None, values
+    return values[:, 0], values[:, 1:]
+
+
+def _values(path: Path, rows: list, columns: Sequence[int], width: int) -> np.ndarray:
+    """The numbers in ``columns`` of every row, each row ``width`` cells long."""
+    values = np.empty((len(rows), len(columns)))
     for k, (line, row) in enumerate(rows):
         if len(row) != width:
             raise InputError(f"{path}:{line}", f"{width} columns", len(row))
-        values[k] = [_number(cell, path, line, c) for c, cell in enumerate(row)]
-    return (values[:, 0], values[:, 1:]) if has_time else (None, values)
+        values[k] = [_number(row[c], path, line, c) for c in columns]
+    return values
 
 
 @dataclass(frozen=True)
