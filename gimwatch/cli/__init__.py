@@ -87,7 +87,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, no usage dump
-        raise UsageError(f"{self.prog}: {message}")
+        if self.prog == "gimwatch" and "required: command" in message:  # `gimwatch` alone
+            message = f"no command given (commands: {', '.join(COMMANDS)})"
+        raise UsageError(f"{self.prog}: {message}; `{self.prog} --help` says more")
 
 
 class HelpFormatter(argparse.HelpFormatter):

@@ -21,7 +21,7 @@ MAX_SAMPLES = 100_000
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("robot", help="chain:N, a URDF path, or an example-robot-data name")
+    parser.add_argument("robot", help="chain:N, a URDF or MJCF path, or an example-robot-data name")
     parser.add_argument(
         "--target", type=float, required=True, metavar="KAPPA", help="the largest kappa allowed"
     )

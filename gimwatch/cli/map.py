@@ -22,7 +22,7 @@ HELP = "kappa and delta over a grid of two joints or along a trajectory: CSV and
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("robot", help="chain:N, a URDF path, or an example-robot-data name")
+    parser.add_argument("robot", help="chain:N, a URDF or MJCF path, or an example-robot-data name")
     parser.add_argument("--joints", nargs=2, metavar=("X", "Y"), help="the two joints to sweep")
     parser.add_argument(
         "--grid", type=positive_int, default=50, metavar="N", help=f"points per side (2-{MAX_GRID})"

@@ -87,10 +87,6 @@ def _read_named_columns(
     ``simulate``'s trajectory.csv and a watch's saved series (``to_dataframe``) have them; other
     columns there (``v:<name>``, energy, watched metrics) are left out.
     """
-    if not rows:
-        raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
-    if len(rows) > MAX_SAMPLES:
-        raise InputError("--trajectory", f"at most {MAX_SAMPLES} rows", len(rows))
     time_column = next((i for i, h in enumerate(header) if h.lower() in _TIME), None)
     prefixed = [i for i, h in enumerate(header) if h.startswith("q:")]
     if prefixed:
@@ -112,6 +108,10 @@ def _read_named_columns(
                 ", ".join(header),
             )
         q_columns = [i for i in range(len(header)) if i != time_column]
+    if not rows:
+        raise InputError("--trajectory", "a CSV file with at least one row of q", str(path))
+    if len(rows) > MAX_SAMPLES:
+        raise InputError("--trajectory", f"at most {MAX_SAMPLES} rows", len(rows))
     wanted = ([time_column] if time_column is not None else []) + q_columns
     values = _values(path, rows, wanted, len(header))
     if time_column is None:
