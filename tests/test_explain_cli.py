@@ -94,3 +94,21 @@ def test_map_trajectory_names_a_missing_q_column(tmp_path, capsys):
     path.write_text("t,q:joint_1,q:joint_2,v:joint_1\n0,0,0,0\n")
     assert main(["map", "chain:3", "--trajectory", str(path), "-o", str(tmp_path / "m")]) == 2
     assert "q:<name> columns joint_1, joint_2, joint_3" in capsys.readouterr().err
+
+
+def test_armature_table_has_units_and_says_none_where_no_armature_is_needed(capsys):
+    assert main(["armature", "ur5", "--target", "100", "--samples", "5", "--per-joint"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    header = next(line for line in lines if line.startswith("coordinate"))
+    assert header.split() == ["coordinate", "armature", "unit"]
+    assert (
+        main(["armature", "ur5", "--target", "100", "--samples", "5", "--per-joint", "--json"]) == 0
+    )
+    added = json.loads(capsys.readouterr().out)["armature"]
+    rows = {line.split()[0]: line.split()[1:] for line in lines if line.split()[0] in added}
+    largest = max(added.values())
+    for name, value in added.items():  # the float64 lift (relative 1e-9) is no rotor to add
+        shown, unit = rows[name]
+        assert unit == "kg*m^2"  # every UR5 joint turns
+        assert (shown == "none") == (value <= 1e-6 * largest)
+    assert any(shown == "none" for shown, _ in rows.values())

@@ -40,6 +40,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print JSON")
 
 
+#: An armature below this fraction of the largest one is the float64 lift of the answer
+#: (a relative 1e-9, see docs/guide/explain.md), not a rotor to add: printed "none".
+NONE_NEEDED = 1e-6
+
+
+def _shown(value: float, largest: float) -> float | str:
+    return "none" if value <= NONE_NEEDED * largest else value
+
+
+def _armature_units(model) -> list[str]:
+    """The unit of each velocity coordinate's armature: kg·m² turning, kg sliding."""
+    units = []
+    for joint in model.joints[1:]:
+        kind = joint.shortname()
+        if "Prismatic" in kind or (kind.startswith("JointModelP") and "Planar" not in kind):
+            units += ["kg"] * joint.nv
+        elif "FreeFlyer" in kind:
+            units += ["kg"] * 3 + ["kg*m^2"] * 3
+        elif "Planar" in kind:
+            units += ["kg"] * 2 + ["kg*m^2"]
+        else:
+            units += ["kg*m^2"] * joint.nv
+    return units
+
+
 def run(args: argparse.Namespace) -> int:
     """Compute and print."""
     if args.samples > MAX_SAMPLES:
@@ -58,7 +83,13 @@ def run(args: argparse.Namespace) -> int:
     kind = "per joint (least total)" if plan.per_joint else "uniform"
     print(f"{robot.name}: target kappa {plan.target:g} over {len(qs)} configuration(s), {kind}")
     print(f"kappa max: {max(plan.kappa_before):.6g} -> {max(plan.kappa_after):.6g}")
-    print(table(["coordinate", "armature"], list(zip(plan.dof_names, plan.armature, strict=True))))
+    rows = [
+        [name, _shown(value, max(plan.armature)), unit]
+        for name, value, unit in zip(
+            plan.dof_names, plan.armature, _armature_units(robot.model), strict=True
+        )
+    ]
+    print(table(["coordinate", "armature", "unit"], rows))
     gap = "" if not plan.per_joint else f" (least total >= {plan.lower_bound:.6g})"
     print(f"total {plan.total:.6g}{gap}")
     change = np.array(plan.qdd_change)
