@@ -319,7 +319,7 @@ def test_long_chain_step_costs_are_the_committed_run():
 
     match = _find(
         "docs/findings/long-chains.md",
-        r"Pinocchio ABA = ([\d.]+) at n = 10 \(call overhead\), ([\d.]+) at n = 100, ([\d.]+) at "
+        r"Pinocchio ABA = ([\d.]+) at n = 10, ([\d.]+) at n = 100, ([\d.]+) at "
         r"n = 400 \(the\s+largest Pinocchio Data allowed here\); DeNOC alone ([\d.]+) ms at "
         r"n = 1,000 and ([\d.]+) ms at\s+n = 10,000",
     )
