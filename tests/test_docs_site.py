@@ -136,3 +136,15 @@ def test_bench_block_of_a_nested_output_links_through_the_docs_link(tmp_path):
     assert "](../benchmarks/cost/denoc_cost.png)" in text
     assert "Full report: `benchmarks/cost/report.md`" in text
     assert str(tmp_path) not in text
+
+
+def test_readme_command_table_lists_every_command():
+    from gimwatch.cli import COMMANDS
+
+    rows = [
+        line
+        for line in (ROOT / "README.md").read_text().splitlines()
+        if line.startswith("| `gimwatch ")
+    ]
+    named = {word for row in rows for word in re.findall(r"`gimwatch (\w+)", row)}
+    assert set(COMMANDS) - named == set()
