@@ -9,6 +9,7 @@ BASE_STAMP := $(VENV)/.base-stamp
 
 # The package alone: what `make demo` needs.
 $(BASE_STAMP): pyproject.toml
+	@echo "make: installing gimwatch into $(VENV) (once; about 1-2 minutes)"
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e .
@@ -16,6 +17,7 @@ $(BASE_STAMP): pyproject.toml
 
 # Everything the tests, notebooks and docs need.
 $(STAMP): $(BASE_STAMP)
+	@echo "make: installing the test, notebook and docs tools into $(VENV) (once)"
 	$(PY) -m pip install --quiet -e '.[test,notebooks,docs,pandas]'
 	touch $(STAMP)
 
