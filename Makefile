@@ -3,32 +3,48 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
+BASE_STAMP := $(VENV)/.base-stamp
 
-.PHONY: setup demo test lint bench docs clean mutation
+.PHONY: setup demo test test-fast lint bench docs clean mutation
 
-$(STAMP): pyproject.toml
+# The package alone: what `make demo` needs.
+$(BASE_STAMP): pyproject.toml
+	@echo "make: installing gimwatch into $(VENV) (once; about 1-2 minutes)"
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e .
+	touch $(BASE_STAMP)
+
+# Everything the tests, notebooks and docs need.
+$(STAMP): $(BASE_STAMP)
+	@echo "make: installing the test, notebook and docs tools into $(VENV) (once)"
 	$(PY) -m pip install --quiet -e '.[test,notebooks,docs,pandas]'
 	touch $(STAMP)
 
 setup: $(STAMP)
 
-demo: setup
+demo: $(BASE_STAMP)
 	$(VENV)/bin/gimwatch demo -o demo-output
 
-test: setup
+# The fast tier (under 3 minutes on 2 cores): every test not marked slow (tests/conftest.py
+# lists the slow files).
+test-fast: setup
 	$(PY) -W error -c "import gimwatch"
 	$(VENV)/bin/ruff check gimwatch tests
 	$(VENV)/bin/ruff format --check gimwatch tests
-	$(PY) -m pytest -n 2 --nbmake tests $(wildcard notebooks/*.ipynb)
+	$(PY) -m pytest -n 2 -m "not slow" tests
+
+# The fast tier first, then the slow one, the notebooks and the docs site.
+test: test-fast
+	$(PY) -m pytest -n 2 -m slow tests
+	$(PY) -m pytest -n 2 --nbmake $(wildcard notebooks/*.ipynb)
 	$(MAKE) docs
 
 # The documentation site (docs/ -> site/), warnings as errors. Its python blocks, sh blocks and
 # console transcripts are run by tests/test_docs.py; its API pages are read by
 # tests/test_api_site.py.
 docs: setup
-	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict --quiet
+	NO_MKDOCS_2_WARNING=1 $(VENV)/bin/mkdocs build --strict
 
 # Regenerates benchmarks/survey/ and the table of docs/findings/survey.md
 .PHONY: survey

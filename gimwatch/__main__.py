@@ -33,6 +33,12 @@ def entry_point() -> None:
         print("gimwatch: interrupted", file=sys.stderr)
         status = 128 + (_received[0] if _received else signal.SIGINT)
     _forget_handled_interrupt()
+    try:
+        sys.stdout.flush()  # now, not at shutdown, where a closed pipe prints a traceback
+    except BrokenPipeError:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, sys.stdout.fileno())
+        os.close(null)
     for signum in (signal.SIGINT, signal.SIGTERM):  # the work is done: a late signal ends
         if signal.getsignal(signum) is not signal.SIG_IGN:  # the shutdown, without a traceback
             signal.signal(signum, _exit_now)

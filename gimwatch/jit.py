@@ -8,35 +8,63 @@ user's cache folder (numba's user-wide locator, ``~/.cache/numba`` on Linux;
 folder can be written at all, the kernels are compiled in every process instead of failing.
 
 A compilation (a cache miss, not a cache load) of a gimwatch kernel logs one line on the
-``gimwatch`` logger at WARNING level, once per process, so that a slow first run says why it
-is slow: on stderr by Python's default (no logging configured), silenced with
-``logging.getLogger("gimwatch").setLevel(logging.ERROR)``.
+``gimwatch`` logger at WARNING level, once per install (a marker file next to the cache
+records that it was said), so that a slow first run says why it is slow and what the next
+first runs cost: on stderr by Python's default (no logging configured), silenced with
+``logging.getLogger("gimwatch").setLevel(logging.ERROR)``. Each kind of work compiles its own
+kernels on its first run (a watch with δ, a crosscheck, an O(n) chain); they say nothing more.
 """
 
 from __future__ import annotations
 
 import logging
+import os
+from pathlib import Path
 from typing import Any
 
 import numba
 from numba.core import event
 
-__all__ = ["COMPILE_NOTE", "NOTE", "CompileNote", "njit"]
+__all__ = ["COMPILE_NOTE", "NOTE", "CompileNote", "install_marker", "njit"]
 
-#: The line printed on stderr when the first gimwatch kernel of a process is compiled.
+#: The line printed on stderr when the first gimwatch kernel of an install is compiled.
 COMPILE_NOTE = (
-    "gimwatch: compiling numba kernels (first run only; cached in {where}, later runs load them)"
+    "gimwatch: compiling numba kernels, once per install: the first watch with delta, "
+    "crosscheck or O(n) chain run takes 10-40 s longer (cached in {where}; later runs load them)"
 )
 
 
 LOGGER = logging.getLogger("gimwatch")
 
 
-class CompileNote(event.Listener):
-    """Prints `COMPILE_NOTE` on the first compilation of a gimwatch kernel."""
+def install_marker() -> Path:
+    """The file whose presence says this install's note was given.
 
-    def __init__(self) -> None:
+    In the folder numba caches gimwatch's kernels in: ``$NUMBA_CACHE_DIR``, else the package's
+    ``__pycache__`` when writable, else numba's user-wide folder (``~/.cache/numba``).
+    """
+    from gimwatch._version import __version__
+
+    name = f"gimwatch-{__version__}-compile-noted"
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return Path(os.environ["NUMBA_CACHE_DIR"]) / name
+    package_cache = Path(__file__).parent / "__pycache__"
+    if os.access(package_cache if package_cache.exists() else package_cache.parent, os.W_OK):
+        return package_cache / name
+    return Path.home() / ".cache" / "numba" / name
+
+
+class CompileNote(event.Listener):
+    """Prints `COMPILE_NOTE` on the first compilation of a gimwatch kernel of an install.
+
+    Args:
+        marker: The file that records the note was given (`install_marker`); ``None`` notes
+            once per process.
+    """
+
+    def __init__(self, marker: Path | None = None) -> None:
         self.noted = False
+        self.marker = marker
 
     def on_start(self, ev: event.Event) -> None:
         """Note the first compilation of a kernel defined in a gimwatch module."""
@@ -45,15 +73,23 @@ class CompileNote(event.Listener):
         if self.noted or not module.startswith("gimwatch."):
             return
         self.noted = True
+        if self.marker is not None and self.marker.exists():
+            return  # said by an earlier process of this install
         cache = getattr(getattr(dispatcher, "_cache", None), "_cache_path", None)
         LOGGER.warning(COMPILE_NOTE.format(where=cache or "numba's cache folder"))
+        if self.marker is not None:
+            try:
+                self.marker.parent.mkdir(parents=True, exist_ok=True)
+                self.marker.touch()
+            except OSError:  # a read-only install: the note comes again, nothing fails
+                pass
 
     def on_end(self, ev: event.Event) -> None:
         """Nothing to do when a compilation ends."""
 
 
 #: The note of this process, registered with numba's event system at import.
-NOTE = CompileNote()
+NOTE = CompileNote(install_marker())
 event.register("numba:compile", NOTE)
 
 

@@ -68,3 +68,41 @@ def planar_rod_chain_gim(q, mass_kg, length_m) -> np.ndarray:
 @pytest.fixture(scope="session")
 def paper_gim() -> np.ndarray:
     return paper_matrix()
+
+
+# The slow tier: whole files of long runs (subprocesses per case, every example robot, every
+# docs block, signal and fault injection, benchmarks, hypothesis). `make test-fast` deselects
+# them with -m "not slow"; `make test` runs the fast tier first, then these. A single long
+# test elsewhere carries @pytest.mark.slow itself. Re-measure with
+# `pytest -n 2 -m "not slow" --durations=30` when the fast tier nears 3 minutes.
+SLOW_FILES = {
+    "test_bench.py",
+    "test_cli_survey.py",
+    "test_demo.py",
+    "test_denoc.py",
+    "test_docs.py",
+    "test_docs_numbers.py",
+    "test_example_robot_loader.py",
+    "test_faults_folders.py",
+    "test_faults_folders_hostile.py",
+    "test_faults_inputs.py",
+    "test_fuzz_scene.py",
+    "test_fuzz_urdf.py",
+    "test_interrupted_outputs.py",
+    "test_mjcf_compiled.py",
+    "test_mujoco_peer.py",
+    "test_real_files.py",
+    "test_reference_precision.py",
+    "test_startup_imports.py",
+    "test_stress.py",
+    "test_stress_properties.py",
+    "test_survey.py",
+    "test_watch_bench.py",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark every test of `SLOW_FILES` slow."""
+    for item in items:
+        if item.path.name in SLOW_FILES:
+            item.add_marker(pytest.mark.slow)

@@ -55,7 +55,7 @@ def test_unknown_command_suggests_and_top_help_imports_no_command(capsys):
             "import sys; from gimwatch.cli import main\n"
             "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
             "prefixes = ('gimwatch.cli.', 'scipy', 'numba')\n"
-            "helpers = ('gimwatch.cli._signals',)\n"
+            "helpers = ('gimwatch.cli._signals', 'gimwatch.cli._pipe')\n"
             "print([m for m in sys.modules if m.startswith(prefixes) and m not in helpers])",
         ],
         capture_output=True,

@@ -70,3 +70,45 @@ def test_map_command_writes_the_folder(tmp_path, capsys):
     argv = ["map", "chain:3", "--trajectory", str(csv), "-o", str(tmp_path / "t")]
     assert main(argv) == 0
     assert (tmp_path / "t" / "trajectory.png").exists()
+
+
+def test_map_reads_the_trajectory_simulate_writes(tmp_path, capsys):
+    """simulate → map --trajectory: the q:<joint> columns are the q, the v:<joint> ones left out."""
+    assert main(["simulate", "chain_4", "-o", str(tmp_path / "sim")]) == 0
+    capsys.readouterr()
+    trajectory = tmp_path / "sim" / "trajectory.csv"
+    assert main(["map", "chain:4", "--trajectory", str(trajectory), "-o", str(tmp_path / "m")]) == 0
+    out, err = capsys.readouterr()
+    assert f"wrote {tmp_path / 'm'}" in err and "wrote" not in out  # as the other commands
+    table = np.genfromtxt(tmp_path / "m" / "trajectory.csv", delimiter=",", names=True)
+    sim = np.genfromtxt(trajectory, delimiter=",", names=True)
+    robot = load_robot("chain:4")
+    for k in (0, len(sim) // 2, len(sim) - 1):  # κ of Pinocchio's M at the file's q, not its v
+        q = np.array([sim[f"qjoint_{j}"][k] for j in range(1, 5)])
+        eigenvalues = np.linalg.eigvalsh(pin.crba(robot.model, robot.model.createData(), q))
+        np.testing.assert_allclose(table["kappa"][k], eigenvalues[-1] / eigenvalues[0], rtol=1e-9)
+
+
+def test_map_trajectory_names_a_missing_q_column(tmp_path, capsys):
+    path = tmp_path / "t.csv"
+    path.write_text("t,q:joint_1,q:joint_2,v:joint_1\n0,0,0,0\n")
+    assert main(["map", "chain:3", "--trajectory", str(path), "-o", str(tmp_path / "m")]) == 2
+    assert "q:<name> columns joint_1, joint_2, joint_3" in capsys.readouterr().err
+
+
+def test_armature_table_has_units_and_says_none_where_no_armature_is_needed(capsys):
+    assert main(["armature", "ur5", "--target", "100", "--samples", "5", "--per-joint"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    header = next(line for line in lines if line.startswith("coordinate"))
+    assert header.split() == ["coordinate", "armature", "unit"]
+    assert (
+        main(["armature", "ur5", "--target", "100", "--samples", "5", "--per-joint", "--json"]) == 0
+    )
+    added = json.loads(capsys.readouterr().out)["armature"]
+    rows = {line.split()[0]: line.split()[1:] for line in lines if line.split()[0] in added}
+    largest = max(added.values())
+    for name, value in added.items():  # the float64 lift (relative 1e-9) is no rotor to add
+        shown, unit = rows[name]
+        assert unit == "kg*m^2"  # every UR5 joint turns
+        assert (shown == "none") == (value <= 1e-6 * largest)
+    assert any(shown == "none" for shown, _ in rows.values())

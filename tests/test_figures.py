@@ -244,7 +244,9 @@ def test_one_outlier_does_not_stretch_the_survey_scatter():
 
 
 def test_a_small_survey_has_no_empty_legend_entry():
-    ax = survey_plots.plot_kappa_vs_delta(_survey(3), ax=_axes())
+    survey = _survey(3)
+    survey.robots[0].pearson_log = 0.5  # all three coloured
+    ax = survey_plots.plot_kappa_vs_delta(survey, ax=_axes())
     labels = [c.get_label() for c in ax.collections]
     assert not [x for x in labels if "other" in x]
     many = survey_plots.plot_kappa_vs_delta(_survey(12), ax=_axes())
@@ -330,3 +332,17 @@ def test_watch_plot_draws_the_watched_metrics_and_the_threshold():
     _assert_units(ax, "plot_watch")
     with pytest.raises(gw.InputError):
         watch.plot(("eigenvalues",), ax=_axes())
+
+
+def test_a_robot_whose_r_prints_as_one_is_never_coloured_as_tracking_worst():
+    survey = _survey(3)  # r = 1.00, 0.99, 0.98
+    survey.robots[1].pearson_log = 0.996  # prints as 1.00 too
+    ax = survey_plots.plot_kappa_vs_delta(survey, ax=_axes())
+    coloured = [c.get_label() for c in ax.collections if c.get_label().startswith("robot_")]
+    assert coloured == ["robot_2 (r = 0.98)"]
+    assert "the 1 where log δ tracks log κ worst" in ax.get_title()
+    for robot in survey.robots:
+        robot.pearson_log = 1.0
+    ax = survey_plots.plot_kappa_vs_delta(survey, ax=_axes())
+    assert "worst" not in ax.get_title()
+    assert not [c for c in ax.collections if c.get_label().startswith("robot_")]

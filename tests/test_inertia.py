@@ -81,3 +81,28 @@ def test_linear_time_diagonal_equals_crba_on_example_robots(name, floating):
         M = gim(robot, q, data=data)
         np.testing.assert_allclose(gim_diagonal(robot, q, data=data), np.diag(M), rtol=1e-12)
         np.testing.assert_allclose(M, M.T, rtol=0, atol=0)
+
+
+def test_gim_without_data_reuses_one_data_per_robot(monkeypatch):
+    """`gw.gim(robot, q)` in a loop builds one Pinocchio Data, and its M is Pinocchio's."""
+    import pinocchio as pin
+
+    from gimwatch.model.robots import Robot
+
+    made = []
+    original = Robot.new_data
+
+    def counting(self):
+        made.append(self.name)
+        return original(self)
+
+    monkeypatch.setattr(Robot, "new_data", counting)
+    ur5, panda = load_robot("ur5"), load_robot("panda")
+    qs = random_configurations(ur5, 3, seed=5)
+    for q in qs:
+        fresh = pin.crba(ur5.model, ur5.model.createData(), q)
+        np.testing.assert_array_equal(gim(ur5, q), np.triu(fresh) + np.triu(fresh, 1).T)
+    gim_diagonal(ur5, qs[0])
+    assert made == ["ur5"]
+    gim(panda, neutral_configuration(panda))
+    assert made == ["ur5", "panda"]

@@ -69,3 +69,21 @@ def test_no_writable_cache_folder_compiles_without_cache(monkeypatch):
         return 2.0 * x
 
     assert twice(np.float64(2.0)) == 4.0 and asked == [True, False]
+
+
+def test_the_compile_note_comes_once_per_install(caplog, monkeypatch, tmp_path):
+    """A second process of the same install (a new note, the same marker) says nothing."""
+    monkeypatch.setattr(NOTE, "noted", True)
+    marker = tmp_path / "cache" / "noted"
+    caplog.set_level(logging.WARNING, logger="gimwatch")
+    for process in range(2):
+        note = CompileNote(marker)
+        event.register("numba:compile", note)
+        try:
+            assert _kernel(f"gimwatch.probe_install_{process}")(np.float64(1.0)) == 2.0
+        finally:
+            event.unregister("numba:compile", note)
+        assert marker.exists()
+    assert len(caplog.records) == 1
+    assert "once per install" in caplog.records[0].getMessage()
+    assert "10-40 s" in caplog.records[0].getMessage()

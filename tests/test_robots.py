@@ -40,8 +40,14 @@ def test_random_configurations_are_seeded_valid_and_within_limits(spec):
         (
             "ur55",
             RobotError,
-            "robot 'ur55': not chain:N, a URDF file, or an example-robot-data "
+            "robot 'ur55': not chain:N, a URDF or MJCF file, or an example-robot-data "
             "robot; did you mean ur5",
+        ),
+        (
+            "UR5",
+            RobotError,
+            "robot 'UR5': not chain:N, a URDF or MJCF file, or an example-robot-data "
+            "robot; did you mean ur5?",
         ),
         ("chain:x", InputError, "the N of chain:N must be a positive integer, got 'x'"),
         ("chain:0", InputError, "the number of links must be an integer between 1"),

@@ -328,3 +328,21 @@ def test_on_alarm_stop_keeps_results_and_ctrl_c_keeps_them_too():
 # Floating bases (free fall of the centre of mass, unit quaternions) and continuous joints
 # in every integrator: tests/test_manifold.py. (A floating chain:N is singular: its massless
 # base link turns about the same axis as joint_1, so it cannot be used for these.)
+
+
+def test_every_simulate_plot_names_its_robot(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    from gimwatch.cli import main
+
+    titles = {}
+    real = Figure.savefig
+
+    def recording(self, path, *args, **kwargs):
+        titles[path.name] = self.get_suptitle()
+        return real(self, path, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", recording)
+    assert main(["simulate", "chain_4", "-o", str(tmp_path / "run")]) == 0
+    assert {p.name for p in (tmp_path / "run").glob("*.png")} == set(titles)
+    assert len(titles) >= 5 and all(t == "chain_4" for t in titles.values())

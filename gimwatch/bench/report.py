@@ -177,7 +177,7 @@ def update_readme(readme: Path, env: dict, results: list[SectionResult], output:
         f"NumPy {env['numpy']}, SciPy {env['scipy']}; BLAS on one thread — on "
         f"{blas['threads_all']} threads a {blas['n']}x{blas['n']} `eigvalsh` was "
         f"{blas['ratio']:.3g}x slower in the same run). Full report: "
-        f"`{Path(output).as_posix()}/report.md`.",
+        f"`{_repository_path(output)}/report.md`.",
         "",
     ]
     for result in results:
@@ -193,16 +193,32 @@ def update_readme(readme: Path, env: dict, results: list[SectionResult], output:
 def _figure_prefix(page: Path, output: Path) -> str:
     """The relative path from ``page`` to ``output`` ("../benchmarks/"), through a link if any.
 
-    The nearest folder above the page holding an entry named like ``output`` that resolves to
-    it (a symbolic link ``docs/benchmarks``, or ``output`` itself) is used.
+    The nearest folder above the page holding an entry named like ``output`` or one of its
+    parents that resolves to it (a symbolic link ``docs/benchmarks`` for ``benchmarks/cost``,
+    or ``output`` itself) is used; otherwise the plain relative path. Never an absolute path:
+    the page is read on other machines.
     """
     target = Path(output).resolve()
     page_dir = Path(page).absolute().parent
-    for folder in (page_dir, *page_dir.parents):
-        candidate = folder / target.name
-        if candidate.exists() and candidate.resolve() == target:
-            return Path(os.path.relpath(candidate, page_dir)).as_posix() + "/"
-    return target.as_posix() + "/"
+    for ancestor in (target, *target.parents):
+        if not ancestor.name:
+            break  # the file-system root: no link to it
+        rest = target.relative_to(ancestor)
+        for folder in (page_dir, *page_dir.parents):
+            candidate = folder / ancestor.name
+            if candidate.exists() and candidate.resolve() == ancestor:
+                link = Path(os.path.relpath(candidate, page_dir)) / rest
+                return link.as_posix() + "/"
+    return Path(os.path.relpath(target, page_dir.resolve())).as_posix() + "/"
+
+
+def _repository_path(output: Path) -> str:
+    """``output`` relative to the repository holding it ("benchmarks/cost"), else its name."""
+    target = Path(output).resolve()
+    for folder in target.parents:
+        if (folder / "pyproject.toml").exists():
+            return target.relative_to(folder).as_posix()
+    return target.name
 
 
 def markdown_table(rows: list[dict], columns: dict[str, str]) -> str:

@@ -21,6 +21,7 @@ from importlib import import_module  # bound now: tests may patch importlib
 from types import ModuleType
 
 from gimwatch._version import __version__
+from gimwatch.cli._pipe import QuietPipe, discard_stdout
 from gimwatch.cli._signals import LATCH, fault_pause
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.suggest import did_you_mean
@@ -103,7 +104,9 @@ class _Parser(argparse.ArgumentParser):
         self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message: str) -> None:  # one line, no usage dump
-        raise UsageError(f"{self.prog}: {message}")
+        if self.prog == "gimwatch" and "required: command" in message:  # `gimwatch` alone
+            message = f"no command given (commands: {', '.join(COMMANDS)})"
+        raise UsageError(f"{self.prog}: {message}; `{self.prog} --help` says more")
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -190,9 +193,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Warnings print as one ``gimwatch: warning: ...`` line each; errors gimwatch raises on
     purpose as one ``gimwatch: error: ...`` line, with exit status 2; SIGINT (Ctrl-C) and
-    SIGTERM as ``gimwatch: interrupted``, with exit status 130 or 143.
+    SIGTERM as ``gimwatch: interrupted``, with exit status 130 or 143. A reader that closes
+    stdout early (``| head -1``) gets what it read; the command ends with its own status.
     """
     installed = LATCH.install()
+    stdout, sys.stdout = sys.stdout, QuietPipe(sys.stdout)
     try:
         with warnings.catch_warnings():
             warnings.showwarning = _show_warning
@@ -204,7 +209,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("gimwatch: interrupted", file=sys.stderr)
         return LATCH.exit_status
+    except BrokenPipeError:  # written around sys.stdout (its buffer): the work was done
+        discard_stdout(stdout)
+        return EXIT_OK
     finally:
+        sys.stdout.flush()
+        sys.stdout = stdout
         if installed:
             LATCH.uninstall()
 

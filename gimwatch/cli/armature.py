@@ -63,6 +63,41 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print JSON")
 
 
+#: An armature below this fraction of the largest one is the float64 lift of the answer
+#: (a relative 1e-9, see docs/guide/explain.md), not a rotor to add: printed "none".
+NONE_NEEDED = 1e-6
+
+
+def _shown(value: float, largest: float) -> float | str:
+    return "none" if value <= NONE_NEEDED * largest else value
+
+
+def _armature_units(model) -> list[str]:
+    """The unit of each velocity coordinate's armature: kg·m² turning, kg sliding."""
+    units = []
+    for joint in model.joints[1:]:
+        kind = joint.shortname()
+        if "Prismatic" in kind or (kind.startswith("JointModelP") and "Planar" not in kind):
+            units += ["kg"] * joint.nv
+        elif "FreeFlyer" in kind:
+            units += ["kg"] * 3 + ["kg*m^2"] * 3
+        elif "Planar" in kind:
+            units += ["kg"] * 2 + ["kg*m^2"]
+        else:
+            units += ["kg*m^2"] * joint.nv
+    return units
+
+
+def _armature_rows(names, armature, model, *extra) -> list[list]:
+    """Rows of (coordinate, armature or "none", unit, *extra columns)."""
+    largest = max(armature) if len(armature) else 0.0
+    units = _armature_units(model)
+    return [
+        [name, _shown(value, largest), unit, *more]
+        for name, value, unit, *more in zip(names, armature, units, *extra, strict=True)
+    ]
+
+
 def run(args: argparse.Namespace) -> int:
     """Compute and print."""
     if args.samples is not None and args.samples > MAX_SAMPLES:
@@ -94,7 +129,8 @@ def run(args: argparse.Namespace) -> int:
     kind = "per joint (least total)" if plan.per_joint else "uniform"
     print(f"{robot.name}: target kappa {plan.target:g} over {len(qs)} configuration(s), {kind}")
     print(f"kappa max: {max(plan.kappa_before):.6g} -> {max(plan.kappa_after):.6g}")
-    print(table(["coordinate", "armature"], list(zip(plan.dof_names, plan.armature, strict=True))))
+    rows = _armature_rows(plan.dof_names, plan.armature, robot.model)
+    print(table(["coordinate", "armature", "unit"], rows))
     gap = "" if not plan.per_joint else f" (least total >= {plan.lower_bound:.6g})"
     print(f"total {plan.total:.6g}{gap}")
     change = np.array(plan.qdd_change)
@@ -146,17 +182,16 @@ def _timestep(args: argparse.Namespace) -> int:
         f"h* (min over configurations): {min(plan.h_star_before_s):.4g} s -> "
         f"{min(plan.h_star_after_s):.4g} s"
     )
-    rows = list(
-        zip(
-            plan.dof_names,
-            plan.armature,
-            plan.inertia_percent,
-            plan.servo_frequency_before_rad_s,
-            plan.servo_frequency_after_rad_s,
-            strict=True,
-        )
+    rows = _armature_rows(
+        plan.dof_names,
+        plan.armature,
+        robot.model,
+        plan.inertia_percent,
+        plan.servo_frequency_before_rad_s,
+        plan.servo_frequency_after_rad_s,
     )
-    print(table(["coordinate", "armature", "% of M_ii", "servo_rad_s", "after_rad_s"], rows))
+    header = ["coordinate", "armature", "unit", "% of M_ii", "servo_rad_s", "after_rad_s"]
+    print(table(header, rows))
     gap = "" if not plan.per_joint else f" (least total >= {plan.lower_bound:.6g})"
     print(f"total {plan.total:.6g}{gap}")
     change = np.array(plan.qdd_change)

@@ -112,6 +112,10 @@ def _print(results: list, args: argparse.Namespace) -> None:
             ]
         )
     print(table(headers, rows))
+    print(
+        f"columns {headers[3]} to {headers[-2]}: worst relative error |x - x_ref|/|x_ref| "
+        "over the samples; kappa: the largest"
+    )
     for r in results:
         if isinstance(r, dict):
             print(f"{r['robot']}: refused: {r['note']}")

@@ -20,7 +20,7 @@ SHOWN = 3
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("robot", help="chain:N, a URDF path, or an example-robot-data name")
+    parser.add_argument("robot", help="chain:N, a URDF or MJCF path, or an example-robot-data name")
     parser.add_argument(
         "--q",
         type=float,

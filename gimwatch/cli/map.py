@@ -24,7 +24,7 @@ PARAMETER_OPTIONS = {"path": "--trajectory"}
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the subcommand's arguments."""
-    parser.add_argument("robot", help="chain:N, a URDF path, or an example-robot-data name")
+    parser.add_argument("robot", help="chain:N, a URDF or MJCF path, or an example-robot-data name")
     parser.add_argument("--joints", nargs=2, metavar=("X", "Y"), help="the two joints to sweep")
     parser.add_argument(
         "--grid", type=positive_int, default=50, metavar="N", help=f"points per side (2-{MAX_GRID})"
@@ -95,5 +95,5 @@ def run(args: argparse.Namespace) -> int:
     for metric, values in result.values.items():
         low, high = np.nanmin(values), np.nanmax(values)
         print(f"{metric}: {low:.6g} to {high:.6g}")
-    print(f"wrote {written.parent}")
+    print(f"wrote {written.parent}", file=sys.stderr)
     return 130 if result.interrupted else 0

@@ -5,7 +5,7 @@ velocity coordinates nv with the base every command gives it by default: example
 (a free-flyer for legged robots, humanoids and drones, as ``example_robot_data.load`` builds
 them; ``--fixed`` fixes it), fixed for the others. Robots with no joint when fixed are listed
 with a floating base; robots that cannot be loaded are listed with the reason.
-``chain:N`` (the paper's rod chain) and URDF paths are accepted wherever a ROBOT is.
+``chain:N`` (the paper's rod chain) and URDF or MJCF paths are accepted wherever a ROBOT is.
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         )
         print(
             f"\n{sum(r['nv'] is not None for r in rows)} of {len(rows)} robots load; "
-            "also accepted: chain:N (the paper's rod chain) and URDF paths"
+            "also accepted: chain:N (the paper's rod chain) and URDF or MJCF paths"
         )
     return 0
 

@@ -3,6 +3,8 @@
 The file has one row per sample and ``nq`` numeric columns in Pinocchio's q order; a first
 row of column names is allowed (then the names must be the robot's coordinate names, e.g.
 ``shoulder_pan_joint``, or ``t`` plus them: a first ``t``/``time`` column is kept as time).
+``simulate``'s trajectory.csv is read as it is: its ``q:<name>`` columns are the q, ``t`` the
+time, and its ``v:<name>`` columns (or a watch's metric columns) are left out.
 Every error names the file, the line and what is wrong. The metrics run through
 `gimwatch.explain.maps.metrics_at` in chunks, as maps do.
 """
@@ -89,54 +91,83 @@ def read_trajectory_csv(
     path = Path(path)
     names = list(names)
     blocks: list[np.ndarray] = []
-    count, has_time, width = 0, False, len(names)
+    count, layout = 0, None
     try:
         with path.open(newline="", encoding="utf-8") as stream:
-            reader = csv.reader(_lines(stream, path, len(names) + 1))
-            first = True
+            # simulate's trajectory.csv holds v, energy and watched metrics too: room for them
+            reader = csv.reader(_lines(stream, path, 3 * len(names) + 64))
             for row in reader:
                 if not row:
                     continue
                 line = reader.line_num
-                if first:
-                    first = False
-                    has_time = row[0].strip().lower() in _TIME
-                    width = len(names) + has_time
-                    if _is_header(row, names, has_time, path):
+                if layout is None:
+                    layout = _layout(row, names, path)
+                    if layout.header:
                         continue
                 if count == MAX_SAMPLES:
                     raise InputError("path", f"at most {MAX_SAMPLES} rows", f"more ({path})")
-                if len(row) != width:
-                    raise InputError(f"{path}:{line}", f"{width} columns", len(row))
+                if len(row) != layout.width:
+                    raise InputError(f"{path}:{line}", f"{layout.width} columns", len(row))
                 if count % _BLOCK == 0:
-                    blocks.append(np.empty((_BLOCK, width)))
+                    blocks.append(np.empty((_BLOCK, len(layout.columns))))
                 blocks[-1][count % _BLOCK] = [
-                    _number(cell, path, line, c) for c, cell in enumerate(row)
+                    _number(row[c], path, line, c) for c in layout.columns
                 ]
                 count += 1
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
         raise InputError("path", "a readable CSV file", str(path), hint=str(exc)) from None
-    if count == 0:
+    if count == 0 or layout is None:
         raise InputError("path", "a CSV file with at least one row of q", str(path))
     values = np.concatenate(blocks)[:count] if len(blocks) > 1 else blocks[0][:count]
-    return (values[:, 0], values[:, 1:]) if has_time else (None, values)
+    return (values[:, 0], values[:, 1:]) if layout.time else (None, values)
 
 
-def _is_header(row: list[str], names: list[str], has_time: bool, path: Path) -> bool:
-    """Whether the first row is a header (its first cell is no number); checks its names."""
+@dataclass(frozen=True)
+class _Layout:
+    """Which cells of a row are read: the time (first, if ``time``) and q, of ``width``."""
+
+    header: bool
+    columns: list[int]
+    width: int
+    time: bool
+
+
+def _layout(row: list[str], names: list[str], path: Path) -> _Layout:
+    """The layout of a file from its first row (a header row when its first cell is no number).
+
+    Two header layouts: bare coordinate names (``t`` first optionally), or ``q:<name>`` columns
+    as ``simulate``'s trajectory.csv and a watch's saved series (``to_dataframe``) have them;
+    other columns there (``v:<name>``, energy, watched metrics) are left out.
+    """
     header = [cell.strip() for cell in row]
     try:
         float(header[0])
-        return False
+        return _Layout(False, list(range(len(names))), len(names), False)
     except ValueError:  # a first cell that is no number: a header row
-        columns = header[1:] if has_time else header
-        if columns != names:
+        pass
+    time_column = next((i for i, h in enumerate(header) if h.lower() in _TIME), None)
+    prefixed = [i for i, h in enumerate(header) if h.startswith("q:")]
+    if prefixed:
+        given = [header[i].removeprefix("q:") for i in prefixed]
+        positional = [f"q{i}" for i in range(len(names))]  # simulate's names when nq != nv
+        if given not in (names, positional):
             raise InputError(
                 f"{path}:1",
-                f"column names {', '.join(names)} (the robot's q order)",
-                ", ".join(columns),
-            ) from None
-        return True
+                f"q:<name> columns {', '.join(names)} (the robot's q order)",
+                ", ".join(header[i] for i in prefixed),
+            )
+        q_columns = prefixed
+    else:
+        columns = [h for i, h in enumerate(header) if i != time_column]
+        if time_column not in (None, 0) or columns != names:
+            raise InputError(
+                f"{path}:1",
+                f"column names {', '.join(names)} (the robot's q order) or q:<name> columns",
+                ", ".join(header),
+            )
+        q_columns = [i for i in range(len(header)) if i != time_column]
+    timed = time_column is not None
+    return _Layout(True, ([time_column] if timed else []) + q_columns, len(header), timed)
 
 
 @dataclass(frozen=True)

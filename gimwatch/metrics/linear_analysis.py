@@ -22,6 +22,7 @@ from gimwatch.errors import InputError
 from gimwatch.metrics.dense_analysis import GimAnalysis, analysis_record, check_massless
 from gimwatch.metrics.registry import GimState
 from gimwatch.model.chains import ChainSpec
+from gimwatch.model.sampling import configuration_draws
 from gimwatch.suggest import did_you_mean
 
 __all__ = ["LINEAR_METRICS", "analyze_linear", "chain_configurations"]
@@ -43,8 +44,8 @@ def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np
     lengths = np.asarray(spec.lengths_m)
     prismatic = np.array([kind == "prismatic" for kind in spec.joint_types])
     half_range = np.where(prismatic, lengths / 2, np.pi)
-    draws = np.random.default_rng(seed).random((spec.n, count))
-    return (-half_range[:, None] + 2 * half_range[:, None] * draws).T
+    draws, _ = configuration_draws(seed, count, spec.n, 0)
+    return -half_range + 2 * half_range * draws
 
 
 def analyze_linear(

@@ -342,9 +342,13 @@ def load_robot(
         if is_mjcf(xml):
             return _mjcf_robot(xml, source, name, text, floating, body, armature)
     else:
-        close = difflib.get_close_matches(text, example_robot_loaders(), n=3)
+        names = list(example_robot_loaders())
+        close = [n for n in names if n.lower() == text.lower()]  # UR5 -> ur5
+        close = close or difflib.get_close_matches(text.lower(), names, n=3)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
-        raise RobotError(text, f"not chain:N, a URDF file, or an example-robot-data robot{hint}")
+        raise RobotError(
+            text, f"not chain:N, a URDF or MJCF file, or an example-robot-data robot{hint}"
+        )
     if body:
         raise InputError("body", "given only with an MJCF file", body)
     model, xml = _build_model(xml, source, floating)

@@ -23,6 +23,7 @@ __all__ = [
     "MAX_RANDOM_WORK_VARIABLE",
     "PLACEHOLDER_LIMIT",
     "check_random_budget",
+    "configuration_draws",
     "is_real_limit",
     "placeholder_limit_joints",
     "placeholder_note",
@@ -123,7 +124,8 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     Args:
         robot: The robot.
         count: Number of configurations, >= 1.
-        seed: Seed of NumPy's generator; the same seed gives the same configurations.
+        seed: Seed of NumPy's generator; the same seed gives the same configurations, and
+            configuration k depends only on (seed, k): a longer run extends a shorter one.
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise InputError("count", "a positive integer", count)
@@ -135,10 +137,10 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     ):
         raise InputError("seed", "None or an integer >= 0", seed)
     model = robot.model
-    rng = np.random.default_rng(seed)
     lower = np.array(model.lowerPositionLimit, dtype=float)
     upper = np.array(model.upperPositionLimit, dtype=float)
-    qs = np.empty((count, model.nq))
+    boxes, units = [], []  # the coordinates drawn in a box, and the unit blocks
+    lows, highs = [], []
     for joint in model.joints[1:]:
         start, stop = joint.idx_q, joint.idx_q + joint.nq
         unit = unit_block_size(joint)
@@ -148,13 +150,43 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
             if joint.shortname().startswith("JointModelR")
             else (_DEFAULT_TRANSLATION_M)
         )
-        lo = np.where(is_real_limit(lower[box]), lower[box], -default)
-        hi = np.where(is_real_limit(upper[box]), upper[box], default)
-        qs[:, box] = rng.uniform(lo, hi, size=(count, stop - unit - start))
+        boxes += range(start, stop - unit)
+        lows.append(np.where(is_real_limit(lower[box]), lower[box], -default))
+        highs.append(np.where(is_real_limit(upper[box]), upper[box], default))
         if unit:
-            block = rng.standard_normal((count, unit))
-            qs[:, stop - unit : stop] = block / np.linalg.norm(block, axis=1, keepdims=True)
+            units.append(slice(stop - unit, stop))
+    width_normal = sum(block.stop - block.start for block in units)
+    uniform, normal = configuration_draws(seed, count, len(boxes), width_normal)
+    qs = np.empty((count, model.nq))
+    if boxes:
+        lo, hi = np.concatenate(lows), np.concatenate(highs)
+        qs[:, boxes] = lo + (hi - lo) * uniform
+    column = 0
+    for block in units:
+        width = block.stop - block.start
+        drawn = normal[:, column : column + width]
+        qs[:, block] = drawn / np.linalg.norm(drawn, axis=1, keepdims=True)
+        column += width
     return qs
+
+
+def configuration_draws(
+    seed: int | None, count: int, width_uniform: int, width_normal: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The random numbers behind ``count`` configurations: uniforms in [0, 1) and normals.
+
+    Row k of each array depends only on (seed, k): the numbers are drawn configuration by
+    configuration (row-major) from two streams spawned from ``seed``, so that
+    ``--random 1 --seed 0`` gives configuration 0 of ``--random 100 --seed 0``.
+
+    Returns:
+        Uniforms of shape ``(count, width_uniform)``, standard normals of shape
+        ``(count, width_normal)``.
+    """
+    uniform_stream, normal_stream = np.random.SeedSequence(seed).spawn(2)
+    uniform = np.random.default_rng(uniform_stream).random((count, width_uniform))
+    normal = np.random.default_rng(normal_stream).standard_normal((count, width_normal))
+    return uniform, normal
 
 
 def placeholder_note(joints: tuple[str, ...]) -> str:

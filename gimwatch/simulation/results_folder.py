@@ -116,9 +116,12 @@ def _plots(trajectory: Trajectory, folder: Path) -> None:
 
     from gimwatch.output import figures as plots
 
-    def save(name, draw):
+    title = trajectory.robot
+
+    def save(name, draw):  # each figure names its robot: figures travel without their folder
         fig = Figure(figsize=(6.4, 4.0), layout="constrained")
         draw(fig.subplots())
+        fig.suptitle(title, fontsize="medium")
         fig.savefig(folder / name, dpi=110)
 
     t, watch = trajectory.t, trajectory.watch

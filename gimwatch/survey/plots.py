@@ -53,6 +53,10 @@ def _robust_limits(values: np.ndarray) -> tuple[float, float]:
     return 10 ** (low - pad), 10 ** (high + pad)
 
 
+#: A Pearson r at or above this prints as 1.00: such a robot is never shown as tracking worst.
+TRACKS_WELL = 0.995
+
+
 def _format(value: float) -> str:
     return "—" if not math.isfinite(value) else f"{value:.2f}"
 
@@ -60,9 +64,12 @@ def _format(value: float) -> str:
 def _worst_tracked(result: SurveyResult, count: int) -> list:
     """The ``count`` robots with the lowest Pearson r of log δ with log κ.
 
-    Robots whose r is undefined (δ or κ constant over the samples) are not candidates.
+    Robots whose r is undefined (δ or κ constant over the samples) are not candidates, nor
+    those whose r prints as 1.00 (r >= `TRACKS_WELL`): they track κ as well as can be shown.
     """
-    defined = [r for r in result.robots if math.isfinite(r.pearson_log)]
+    defined = [
+        r for r in result.robots if math.isfinite(r.pearson_log) and r.pearson_log < TRACKS_WELL
+    ]
     return sorted(defined, key=lambda robot: robot.pearson_log)[:count]
 
 
@@ -119,8 +126,12 @@ def plot_kappa_vs_delta(result: SurveyResult, ax=None):
         ylim=ylim,
         xlabel="diagonal ratio δ [-]",
         ylabel="condition number κ₂ [-]",
-        title=f"κ against δ, {len(result.robots)} robots "
-        f"(coloured: the {len(highlighted)} where log δ tracks log κ worst)",
+        title=f"κ against δ, {len(result.robots)} robots"
+        + (
+            f" (coloured: the {len(highlighted)} where log δ tracks log κ worst)"
+            if highlighted
+            else ""
+        ),
     )
     ax.title.set_fontsize("medium")
     ax.legend(fontsize=7, loc="upper left", title="Pearson r(log δ, log κ)", title_fontsize=7)

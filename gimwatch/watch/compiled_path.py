@@ -52,10 +52,14 @@ class CompiledSampling:
                 return None
             out = []
             for name in self._names:
+                # A λmin near the smallest float gives κ = inf (and λ·scale may overflow): that
+                # is the value watched (the alarm fires on it), not a fault to warn about.
                 if name == "kappa":
-                    out.append(spectrum[-1] / low)
+                    with np.errstate(over="ignore"):
+                        out.append(spectrum[-1] / low)
                 elif name == "eigenvalues":
-                    out.append(spectrum * scale)
+                    with np.errstate(over="ignore"):
+                        out.append(spectrum * scale)
                 elif name == "diagonal":
                     out.append(M.diagonal())
                 else:
