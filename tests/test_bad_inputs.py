@@ -47,6 +47,7 @@ _ROBOT_ARGV: dict[str, Callable[[str, Path], list[str]]] = {
     "survey": lambda robot, out: ["survey", robot, "-o", str(out)],
     "explain": lambda robot, out: ["explain", robot],
     "armature": lambda robot, out: ["armature", robot, "--target", "2", "--samples", "2"],
+    "stability": lambda robot, out: ["stability", robot, "--kp", "100", "--kd", "1"],
     "map": lambda robot, out: [
         *("map", robot, "--joints", "shoulder", "elbow", "--grid", "3", "-o", str(out))
     ],
@@ -352,7 +353,7 @@ BAD_ARGUMENTS = [
     (["armature", "chain:3", "--target", "0.5"], "--target must be a number > 1"),
     (["armature", "chain:3", "--target", "nan"], "--target must be a number > 1"),
     (["armature", "chain:3", "--target", "x"], "argument --target: invalid float value: 'x'"),
-    (["armature", "chain:3"], "the following arguments are required: --target"),
+    (["armature", "chain:3"], "one of the arguments --target --timestep is required"),
     (["armature", "chain:3", "--target", "9", "--samples", "0"], "argument --samples: must be"),
     (["armature", "chain:3", "--target", "9", "--samples", "10**9"], "argument --samples"),
     (["armature", "chain:3", "--target", "9", "--samples", "999999"], "--samples must be at most"),

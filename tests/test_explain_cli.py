@@ -112,3 +112,22 @@ def test_armature_table_has_units_and_says_none_where_no_armature_is_needed(caps
         assert unit == "kg*m^2"  # every UR5 joint turns
         assert (shown == "none") == (value <= 1e-6 * largest)
     assert any(shown == "none" for shown, _ in rows.values())
+
+
+@pytest.mark.parametrize(
+    ("extra", "flag_message"),
+    [
+        (["--joints", "joint_1", "nope", "--grid", "3"], "--joints must be joints of chain_3"),
+        (["--joints", "joint_1", "joint_2", "--grid", "1"], "--grid must be an integer from 2"),
+        (
+            ["--joints", "joint_1", "joint_2", "--grid", "3", "--range", "1", "0", "0", "1"],
+            "--range must be finite lower < upper",
+        ),
+        (["--trajectory", "missing.csv"], "--trajectory must be a readable CSV file"),
+    ],
+)
+def test_map_errors_name_the_flags_the_library_calls_parameters(extra, flag_message, capsys):
+    # the library says joints/grid/ranges/path (its parameters); the command line its flags
+    assert main(["map", "chain:3", *extra, "-o", "unused-map-folder"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"gimwatch: error: {flag_message}"), err

@@ -116,12 +116,12 @@ def test_bad_trajectory_files_name_the_line(tmp_path, text, message):
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"joints": ["joint_1", "nope"]}, "--joints must be joints of chain_3, got 'nope'"),
-        ({"joints": ["joint_1", "joint_1"]}, "--joints must be two different joint names"),
-        ({"grid": 1}, "--grid must be an integer from 2 to 2000, got 1"),
-        ({"grid": 5000}, "--grid must be an integer from 2 to 2000, got 5000"),
-        ({"metrics": ["eigenvalues"]}, "--metrics must be among"),
-        ({"ranges": [(1, 0), (0, 1)]}, "--range must be finite lower < upper"),
+        ({"joints": ["joint_1", "nope"]}, "^joints must be joints of chain_3, got 'nope'"),
+        ({"joints": ["joint_1", "joint_1"]}, "^joints must be two different joint names"),
+        ({"grid": 1}, "^grid must be an integer from 2 to 2000, got 1"),
+        ({"grid": 5000}, "^grid must be an integer from 2 to 2000, got 5000"),
+        ({"metrics": ["eigenvalues"]}, "^metrics must be among"),
+        ({"ranges": [(1, 0), (0, 1)]}, "^ranges must be finite lower < upper"),
     ],
 )
 def test_bad_map_arguments(kwargs, message):

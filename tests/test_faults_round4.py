@@ -54,6 +54,10 @@ def _filler(command: str, skip: str) -> list[str]:
                 words.append("2")
         elif action.required and action.option_strings[-1] != skip:
             words += [action.option_strings[-1], "10"]
+    for group in _subparser(command)._mutually_exclusive_groups:  # one of them is required
+        options = [a.option_strings[-1] for a in group._group_actions]
+        if group.required and skip not in options:
+            words += [options[0], "10"]
     return words
 
 
@@ -518,11 +522,11 @@ def test_a_real_dask_scheduler_passes_the_probe():
     ("keyword", "value", "fragment"),
     [
         ("ranges", [(0, 1)], "two (lower, upper) pairs"),
-        ("ranges", [(0, 1, 2), (0, 1)], "--range must be numbers"),
-        ("ranges", [("a", 1), (0, 1)], "--range must be numbers"),
+        ("ranges", [(0, 1, 2), (0, 1)], "ranges must be numbers"),
+        ("ranges", [("a", 1), (0, 1)], "ranges must be numbers"),
         ("ranges", 3.0, "two (lower, upper) pairs"),
         ("ranges", [(float("nan"), 1), (0, 1)], "finite lower < upper"),
-        ("q", ["a", "b", "c"], "--q must be numbers"),
+        ("q", ["a", "b", "c"], "q must be numbers"),
         ("ranges", [(-1e308, 1e308), (0, 1)], "span upper - lower below 1.8e308"),
     ],
 )
@@ -591,12 +595,12 @@ def test_the_trajectory_row_limit_is_checked_before_the_file_is_read_whole(tmp_p
 
 def test_a_trajectory_line_too_long_is_refused_as_it_streams(tmp_path):
     from gimwatch.errors import InputError
-    from gimwatch.explain.trajectory import MAX_LINE_CHARS, read_trajectory_csv
+    from gimwatch.explain.trajectory import MAX_LINE_CHARS, max_columns, read_trajectory_csv
 
     path = tmp_path / "q.csv"
     path.write_text("0.1,0.2\n" + "1" * 5_000_000 + "\n")
     with pytest.raises(
-        InputError, match=rf"q.csv:2 must be a line of at most {3 * MAX_LINE_CHARS}"
+        InputError, match=rf"q.csv:2 must be a line of at most {max_columns(2) * MAX_LINE_CHARS}"
     ):
         read_trajectory_csv(path, ["joint_1", "joint_2"])
 

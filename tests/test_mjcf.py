@@ -192,7 +192,9 @@ def test_third_party_libraries_stay_quiet_on_stderr(command, tmp_path):
             timeout=120,
         )
         assert run.returncode == 0, run.stderr
-        assert run.stderr == "", run.stderr
+        # only gimwatch's own notes (the slider arm mixes metres and radians) may be there
+        foreign = [line for line in run.stderr.splitlines() if not line.startswith("gimwatch: ")]
+        assert foreign == [], run.stderr
 
 
 _DOUBTFUL_INERTIA = """<mujoco model="doubtful">

@@ -110,18 +110,13 @@ def run(args: argparse.Namespace) -> int:
     if not np.isfinite(args.target) or args.target <= 1.0:
         raise InputError("--target", "a number > 1 (κ ≥ 1 always)", args.target)
     robot = load_robot(args.robot, max_nv=DATA_NV_LIMIT)
-    fits = max_configurations(robot.nv)
-    if args.q is None and args.samples > fits:  # refused before K configurations are drawn
-        raise InputError(
-            "--samples",
-            f"at most {fits} for {robot.name} (nv = {robot.nv}: K nv x nv matrices within "
-            f"the {MAX_MATRIX_BYTES >> 20} MiB budget)",
-            args.samples,
-        )
+    samples = args.samples or DEFAULT_SAMPLES
+    if args.q is None:
+        _check_budget(robot, samples)
     if args.q is not None:
         qs = user_configuration(robot, args.q, key="--q")[None, :]
     else:
-        qs = random_configurations(robot, args.samples or DEFAULT_SAMPLES, seed=args.seed)
+        qs = random_configurations(robot, samples, seed=args.seed)
     plan = minimal_armature(robot, qs, args.target, per_joint=args.per_joint)
     if args.json:
         print(json_text(plan.to_dict()))
@@ -141,6 +136,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_budget(robot, samples: int) -> None:
+    """Refuse K configurations whose K nv × nv matrices exceed the budget, before drawing."""
+    fits = max_configurations(robot.nv)
+    if samples > fits:
+        raise InputError(
+            "--samples",
+            f"at most {fits} for {robot.name} (nv = {robot.nv}: K nv x nv matrices within "
+            f"the {MAX_MATRIX_BYTES >> 20} MiB budget)",
+            samples,
+        )
+
+
 def _timestep(args: argparse.Namespace) -> int:
     from gimwatch.explain.timestep_armature import timestep_armature
     from gimwatch.stability.analysis import held_systems
@@ -154,6 +161,7 @@ def _timestep(args: argparse.Namespace) -> int:
     if args.q is not None:
         qs = user_configuration(robot, args.q, key="--q")[None, :]
     elif args.samples is not None:
+        _check_budget(robot, args.samples)
         qs = random_configurations(robot, args.samples, seed=args.seed)
     options = {"kp": args.kp, "kd": args.kd, "gravity": not args.no_gravity}
     integrator = args.integrator

@@ -32,9 +32,11 @@ from gimwatch.metrics.analyze import choose_path
 from gimwatch.survey.sweep import Task
 
 __all__ = [
+    "EXTRA_COLUMNS",
     "MAX_LINE_CHARS",
     "MAX_SAMPLES",
     "TrajectoryMetrics",
+    "max_columns",
     "read_trajectory_csv",
     "trajectory_metrics",
 ]
@@ -43,6 +45,8 @@ __all__ = [
 MAX_SAMPLES = 10_000_000
 #: Characters a line may hold per column (a float printed by NumPy takes at most 24).
 MAX_LINE_CHARS = 64
+#: Columns beyond t, q and v a line may hold (energy, watched metrics of a saved series).
+EXTRA_COLUMNS = 64
 _BLOCK = 65536  # rows stored per block while the file streams
 _TIME = ("t", "time", "time_s")
 
@@ -71,6 +75,11 @@ def _lines(stream, path: Path, width: int):
         yield text
 
 
+def max_columns(nq: int) -> int:
+    """Columns a trajectory line may hold: simulate's t, q and v plus `EXTRA_COLUMNS`."""
+    return 3 * nq + EXTRA_COLUMNS
+
+
 def read_trajectory_csv(
     path: str | Path, names: Sequence[str]
 ) -> tuple[np.ndarray | None, np.ndarray]:
@@ -94,8 +103,7 @@ def read_trajectory_csv(
     count, layout = 0, None
     try:
         with path.open(newline="", encoding="utf-8") as stream:
-            # simulate's trajectory.csv holds v, energy and watched metrics too: room for them
-            reader = csv.reader(_lines(stream, path, 3 * len(names) + 64))
+            reader = csv.reader(_lines(stream, path, max_columns(len(names))))
             for row in reader:
                 if not row:
                     continue

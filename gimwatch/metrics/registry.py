@@ -414,7 +414,7 @@ class StabilityMargin(Metric):
         if self.servos is None:
             self.servos, self.data = _file_servos(robot, state.q), robot.new_data()
         servos = self.servos
-        held = linearise(robot.model, servos, state.q, data=self.data)
+        held = linearise(robot.model, servos, state.q, data=self.data, source=robot.source)
         system = LinearSystem(state.M, held.stiffness, held.explicit_damping, held.joint_damping)
         h_star = max_stable_timestep(system, servos.integrator or "Euler")
         h = servos.timestep_s or DEFAULT_TIMESTEP_S

@@ -45,8 +45,10 @@ def load_scene_robot(scene) -> Robot:
     except SceneError:
         raise
     except GimwatchError as exc:
-        key = "body" if isinstance(exc, InputError) and exc.name == "body" else "robot"
-        raise scene.error(key, str(exc)) from exc
+        if isinstance(exc, InputError) and exc.name == "body":  # the scene's own key
+            hint = f" ({exc.hint})" if exc.hint else ""
+            raise scene.error("body", f"must be {exc.rule}, got {exc.value!r}{hint}") from exc
+        raise scene.error("robot", str(exc)) from exc
 
 
 def initial_state(scene, robot: Robot) -> tuple[np.ndarray, np.ndarray]:

@@ -182,7 +182,7 @@ def held_systems(
         else:
             ctrl = held_controls(mj_model, q)
             servos = mjcf_servos(robot, mj_model, ctrl)
-        systems.append(linearise(model, servos, q, gravity=gravity, data=data))
+        systems.append(linearise(model, servos, q, gravity=gravity, data=data, source=robot.source))
     return qs, systems, servos
 
 

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from gimwatch.errors import ConditioningError
+from gimwatch.metrics.conditioning import ldlt_pivots
 from gimwatch.stability.servos import Servos
 
 __all__ = ["LinearSystem", "linearise"]
@@ -64,8 +66,29 @@ class LinearSystem:
         )
 
 
+def _check_massive(model: pin.Model, mass: np.ndarray, source: str) -> None:
+    """Refuse an M(q) that is not positive definite, naming the coordinates moving no mass.
+
+    A coordinate that moves no mass has no time scale (its mode's frequency is infinite).
+    """
+    names = [n for j, n in zip(model.joints[1:], model.names[1:], strict=True) for _ in range(j.nv)]
+    massless = [names[k] for k in np.flatnonzero(~(mass.diagonal() > 0))]
+    if massless:
+        raise ConditioningError(
+            f"{source}: M(q) of {model.name} is singular: {len(massless)} coordinate(s) move "
+            f"no mass ({', '.join(massless)}); give the links they move an <inertial>"
+        )
+    ldlt_pivots(mass)  # ConditioningError unless M(q) is positive definite
+
+
 def linearise(
-    model: pin.Model, servos: Servos, q: np.ndarray, *, gravity: bool = True, data=None
+    model: pin.Model,
+    servos: Servos,
+    q: np.ndarray,
+    *,
+    gravity: bool = True,
+    data=None,
+    source: str = "",
 ) -> LinearSystem:
     """The linear system of a robot's Pinocchio ``model`` held at ``q`` by ``servos``.
 
@@ -75,10 +98,15 @@ def linearise(
         q: The held configuration (Pinocchio's q; MuJoCo's qpos for MJCF).
         gravity: Include gravity's stiffness ∂g/∂q.
         data: A Pinocchio Data of ``model`` to reuse.
+        source: The robot's file, named by an error (the model's name when empty).
+
+    Raises:
+        ConditioningError: M(q) is not positive definite (a coordinate moves no mass).
     """
     data = model.createData() if data is None else data
     mass = np.array(pin.crba(model, data, q))
     mass = np.triu(mass) + np.triu(mass, 1).T
+    _check_massive(model, mass, source or model.name)
     stiffness = np.diag(servos.stiffness)
     if gravity:
         stiffness = stiffness + np.array(pin.computeGeneralizedGravityDerivatives(model, data, q))
