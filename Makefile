@@ -72,6 +72,7 @@ bench: setup
 	$(VENV)/bin/gimwatch bench explain -o benchmarks/explain
 	$(VENV)/bin/gimwatch bench startup -o benchmarks/startup
 	$(VENV)/bin/gimwatch bench digits -o benchmarks/digits
+	$(PY) benchmarks/stability/stable_steps.py
 
 # Planted bugs the tests must catch (tests/mutations.py): each applied in a temporary copy of
 # the tree, its test subset run; prints caught/missed/stale per mutant. On demand, not in test.

@@ -95,8 +95,10 @@ SLOW_FILES = {
     "test_reference_precision.py",
     "test_startup_imports.py",
     "test_stress.py",
+    "test_stability_mujoco.py",
     "test_stress_properties.py",
     "test_survey.py",
+    "test_timestep_armature.py",
     "test_watch_bench.py",
 }
 
