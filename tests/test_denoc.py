@@ -10,6 +10,7 @@ import pinocchio as pin
 import pytest
 from conftest import (
     EXAMPLE_ROBOTS,
+    NEAR_SINGULAR_GIM,
     NO_DOF_WHEN_FIXED,
     SINGULAR_GIM,
     paper_matrix,
@@ -278,7 +279,7 @@ _ROBOT_CASES = [
 def test_example_robot_matches_pinocchio(name, floating):
     result = crosscheck_robot(load_robot(name, floating=floating), samples=5, seed=0)
     _assert_passed(result)
-    if name in SINGULAR_GIM:
+    if name in SINGULAR_GIM or (name in NEAR_SINGULAR_GIM and "singular" in result.note):
         assert result.qdd_rel_err is None and "singular" in result.note
     else:
         # nothing skipped: the note may only list placeholder limits
