@@ -157,6 +157,7 @@ def _file_cases() -> list[pytest.param]:
 
 
 @pytest.mark.usefixtures("hang_guard")
+@pytest.mark.filterwarnings("default::gimwatch.errors.GimwatchWarning")  # the CLI shows them
 @pytest.mark.parametrize(("command", "make_argv", "key", "entry"), _file_cases())
 def test_bad_file(command, make_argv, key, entry, tmp_path, capsys, monkeypatch):
     path = str(BAD / key)
