@@ -80,16 +80,22 @@ def paper_gim() -> np.ndarray:
 # test elsewhere carries @pytest.mark.slow itself. Re-measure with
 # `pytest -n 2 -m "not slow" --durations=30` when the fast tier nears 3 minutes.
 SLOW_FILES = {
+    "test_api_site.py",
+    "test_closed_pipe.py",
+    "test_faults_folders_killed.py",
+    "test_tracker_certified.py",
     "test_bench.py",
     "test_cli_survey.py",
     "test_demo.py",
     "test_denoc.py",
     "test_docs.py",
     "test_docs_numbers.py",
+    "test_equilibrated.py",
     "test_example_robot_loader.py",
     "test_faults_folders.py",
     "test_faults_folders_hostile.py",
     "test_faults_inputs.py",
+    "test_faults_round4.py",
     "test_fuzz_scene.py",
     "test_fuzz_urdf.py",
     "test_interrupted_outputs.py",
