@@ -32,6 +32,7 @@ test-fast: setup
 	$(PY) -W error -c "import gimwatch"
 	$(VENV)/bin/ruff check gimwatch tests
 	$(VENV)/bin/ruff format --check gimwatch tests
+	$(PY) -m mypy
 	$(PY) -m pytest -n 2 -m "not slow" tests
 
 # The fast tier first, then the slow one, the notebooks and the docs site.
