@@ -180,6 +180,19 @@ def _sweep(context: BenchContext, table: Table, spec: str, sweep: str, count: in
         )
 
 
+def _over_robots(table: Table, name: str) -> dict:
+    """One estimator's errors, ratios and relative cost, taken over every robot and sweep."""
+    rows = [r for r in table.rows if r["estimator"] == name]
+    return {
+        "estimator": name,
+        "median_rel_error": float(np.median([r["median_rel_error"] for r in rows])),
+        "max_rel_error": float(np.max([r["max_rel_error"] for r in rows])),
+        "min_ratio": float(np.min([r["min_ratio"] for r in rows])),
+        "max_ratio": float(np.max([r["max_ratio"] for r in rows])),
+        "cost_vs_kappa": float(np.median([r["cost_s"] / r["kappa_cost_s"] for r in rows])),
+    }
+
+
 def run(context: BenchContext) -> SectionResult:
     """Sweep each robot, score every estimator, write ``estimators.csv`` and the Pareto plot."""
     robots = QUICK_ROBOTS if context.quick else FULL_ROBOTS
@@ -192,19 +205,7 @@ def run(context: BenchContext) -> SectionResult:
     figure = plot_pareto(
         [r for r in table.rows if r["sweep"] == "swing"], context.output / "estimators_pareto.png"
     )
-    by_estimator = []
-    for name in ESTIMATORS:
-        rows = [r for r in table.rows if r["estimator"] == name]
-        by_estimator.append(
-            {
-                "estimator": name,
-                "median_rel_error": float(np.median([r["median_rel_error"] for r in rows])),
-                "max_rel_error": float(np.max([r["max_rel_error"] for r in rows])),
-                "min_ratio": float(np.min([r["min_ratio"] for r in rows])),
-                "max_ratio": float(np.max([r["max_ratio"] for r in rows])),
-                "cost_vs_kappa": float(np.median([r["cost_s"] / r["kappa_cost_s"] for r in rows])),
-            }
-        )
+    by_estimator = [_over_robots(table, name) for name in ESTIMATORS]
     columns = {
         "estimator": "estimator",
         "median_rel_error": "median rel. error",

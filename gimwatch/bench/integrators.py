@@ -27,6 +27,7 @@ import itertools
 import time
 import tomllib
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -110,74 +111,82 @@ def _simulate(table: dict, integrator: dict, cap_s: float):
     return trajectory, float(np.median(walls))
 
 
-def _row(table: Table, n, simulator, method, rtol, dt, q_ref, v_ref, **values) -> None:
+@dataclass(frozen=True)
+class _Reference:
+    """One chain's scene table and its reference final state (DOP853 at 1e-14)."""
+
+    n: int
+    scene: dict
+    q: np.ndarray
+    v: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """The tolerances and steps swept, and the wall-time cap of one run (s)."""
+
+    tolerances: tuple[float, ...]
+    steps: tuple[float, ...]
+    cap_s: float
+
+
+def _row(table: Table, ref: _Reference, simulator, method, rtol, dt, **values) -> None:
     q, v = values.pop("q", None), values.pop("v", None)
     ok = q is not None and values["status"] == "completed"
     table.add(
-        n=n,
+        n=ref.n,
         simulator=simulator,
         method=method,
         rtol=rtol,
         dt_s=dt,
-        error_rad=float(np.abs(q - q_ref).max()) if ok else np.nan,
-        error_v=float(np.abs(v - v_ref).max()) if ok else np.nan,
+        error_rad=float(np.abs(q - ref.q).max()) if ok else np.nan,
+        error_v=float(np.abs(v - ref.v).max()) if ok else np.nan,
         **values,
     )
 
 
-def _gimwatch_runs(context, table, n, scene, q_ref, v_ref, tolerances, steps, cap_s) -> None:
+def _gimwatch_runs(context, table: Table, ref: _Reference, grid: _Grid) -> None:
     runs = [
-        (m, {"method": m, "rtol": t, "atol": t}, t, np.nan) for m in ADAPTIVE for t in tolerances
+        (m, {"method": m, "rtol": t, "atol": t}, t, np.nan)
+        for m in ADAPTIVE
+        for t in grid.tolerances
     ]
-    runs += [(m, {"method": m, "dt": dt}, np.nan, dt) for m in FIXED for dt in steps]
+    runs += [(m, {"method": m, "dt": dt}, np.nan, dt) for m in FIXED for dt in grid.steps]
     capped: dict[str, str] = {}
     last_fixed: dict[str, tuple[float, float]] = {}
     for method, integrator, rtol, dt in runs:
         label = f"rtol {rtol:g}" if np.isfinite(rtol) else f"dt {dt:g}"
         if method in last_fixed:  # predicted wall time from the previous (larger) step
             prev_dt, prev_wall = last_fixed[method]
-            if prev_wall * prev_dt / dt > cap_s:
+            if prev_wall * prev_dt / dt > grid.cap_s:
                 capped[method] = f"skipped: predicted {prev_wall * prev_dt / dt:.0f} s > cap"
         result = None
         if method not in capped:
-            context.progress(f"  chain:{n}: gimwatch {method} {label}")
-            result = _simulate(scene, integrator, cap_s)
+            context.progress(f"  chain:{ref.n}: gimwatch {method} {label}")
+            result = _simulate(ref.scene, integrator, grid.cap_s)
             if result is None:
-                capped[method] = f"aborted at the {cap_s:g} s cap (or a looser tolerance was)"
+                capped[method] = f"aborted at the {grid.cap_s:g} s cap (or a looser tolerance was)"
         if result is None:  # skipped or aborted: a row saying why, without numbers
-            _row(
-                table,
-                n,
-                "gimwatch",
-                method,
-                rtol,
-                dt,
-                q_ref,
-                v_ref,
-                energy_drift=np.nan,
-                wall_s=np.nan,
-                evaluations=0,
-                steps=0,
-                status=capped[method],
-            )
+            _row(table, ref, "gimwatch", method, rtol, dt, energy_drift=np.nan, wall_s=np.nan,
+                 evaluations=0, steps=0, status=capped[method])  # fmt: skip
             continue
         trajectory, wall = result
         if np.isfinite(dt):
             last_fixed[method] = (dt, wall)
         drift = trajectory.energy_drift()
-        _row(table, n, "gimwatch", method, rtol, dt, q_ref, v_ref,
+        _row(table, ref, "gimwatch", method, rtol, dt,
              q=trajectory.q[-1], v=trajectory.v[-1],
              energy_drift=np.nan if drift is None else float(drift), wall_s=wall,
              evaluations=trajectory.rhs_evaluations, steps=trajectory.steps,
              status=trajectory.status)  # fmt: skip
 
 
-def _mujoco_runs(context, table, n, scene_table, q_ref, v_ref, steps) -> None:
-    simulation = Simulation(parse_scene(scene_table, source="<bench integrators>"))
+def _mujoco_runs(context, table: Table, ref: _Reference, steps) -> None:
+    simulation = Simulation(parse_scene(ref.scene, source="<bench integrators>"))
     model = mujoco_peer.load_model(simulation.robot.urdf_xml, simulation.gravity)
     for method in FIXED:
         for dt in steps:
-            context.progress(f"  chain:{n}: mujoco {method} dt {dt:g}")
+            context.progress(f"  chain:{ref.n}: mujoco {method} dt {dt:g}")
             runs = [
                 mujoco_peer.simulate(
                     model,
@@ -191,7 +200,7 @@ def _mujoco_runs(context, table, n, scene_table, q_ref, v_ref, steps) -> None:
                 for _ in range(3)
             ]
             finite = np.all(np.isfinite(runs[0].q)) and np.all(np.isfinite(runs[0].v))
-            _row(table, n, "mujoco", method, np.nan, dt, q_ref, v_ref,
+            _row(table, ref, "mujoco", method, np.nan, dt,
                  q=runs[0].q, v=runs[0].v, energy_drift=runs[0].energy_drift,
                  wall_s=float(np.median([r.wall_time_s for r in runs])),
                  evaluations=runs[0].steps * (4 if method == "RK4" else 1), steps=runs[0].steps,
@@ -240,9 +249,11 @@ def _acceptance(table: Table, n: int) -> dict:
 def run(context: BenchContext) -> SectionResult:
     """Run every integrator on each chain, write ``integrators.csv`` and the plot."""
     chains = (4,) if context.quick else (10, 20)
-    tolerances = (1e-3, 1e-6) if context.quick else TOLERANCES
-    steps = (1e-2, 5e-3) if context.quick else STEPS_S
-    cap_s = 5.0 if context.quick else CAP_S
+    grid = (
+        _Grid((1e-3, 1e-6), (1e-2, 5e-3), 5.0)
+        if context.quick
+        else _Grid(TOLERANCES, STEPS_S, CAP_S)
+    )
     table = Table("integrators", COLUMNS)
     references = {}
     peer = mujoco_peer.available()
@@ -251,11 +262,11 @@ def run(context: BenchContext) -> SectionResult:
         context.progress(f"  chain:{n}: reference DOP853 at 1e-14 and 1e-13")
         reference, _ = _simulate(scene, {"method": "DOP853", "rtol": 1e-14, "atol": 1e-14}, 1e9)
         check, _ = _simulate(scene, {"method": "DOP853", "rtol": 1e-13, "atol": 1e-13}, 1e9)
-        q_ref, v_ref = reference.q[-1], reference.v[-1]
-        references[n] = float(np.abs(check.q[-1] - q_ref).max())
-        _gimwatch_runs(context, table, n, scene, q_ref, v_ref, tolerances, steps, cap_s)
+        ref = _Reference(n, scene, reference.q[-1], reference.v[-1])
+        references[n] = float(np.abs(check.q[-1] - ref.q).max())
+        _gimwatch_runs(context, table, ref, grid)
         if peer:
-            _mujoco_runs(context, table, n, scene, q_ref, v_ref, steps)
+            _mujoco_runs(context, table, ref, grid.steps)
     figure = plot_work_precision(table.rows, context.output / "work_precision.png")
     n_target = TARGET_CHAIN if TARGET_CHAIN in chains else chains[0]
     verdict, acceptance = _verdict(table, n_target, peer)

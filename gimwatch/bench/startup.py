@@ -131,6 +131,41 @@ def measure(context: BenchContext) -> tuple[Table, dict[str, float], dict]:
     return table, medians, code
 
 
+def _verdict(ok: bool | None) -> str:
+    return "—" if ok is None else ("met" if ok else "**not met**")
+
+
+def _findings(medians: dict[str, float], summary: dict) -> list[str]:
+    """One line per figure against its target: import, analyze, demo, simulate."""
+    import_extra = summary["import_gimwatch_minus_pinocchio_s"]
+    first_extra = summary["import_first_names_minus_pinocchio_s"]
+    ratio, demo = summary["analyze_ur5_over_bare"], summary["demo_s"]
+    lines = [
+        f"- `import gimwatch` costs {import_extra:+.3f} s against `import pinocchio` "
+        f"({medians['import gimwatch']:.3f} s vs {medians['import pinocchio']:.3f} s; "
+        f"target ≤ +{IMPORT_TARGET_S} s: {_verdict(summary['import_target_met'])}); with the "
+        f"first names a script uses (`load_robot`, `gim`, `condition_number`, `run_scene`): "
+        f"{first_extra:+.3f} s.",
+        f"- `gimwatch analyze ur5` takes {medians['gimwatch analyze ur5']:.3f} s, "
+        f"{ratio:.2f}x a bare Pinocchio script loading ur5 and running CRBA + `eigvalsh` "
+        f"({medians['bare ur5 (pinocchio crba + eigvalsh)']:.3f} s; target ≤ "
+        f"{ANALYZE_TARGET_RATIO}x: {_verdict(summary['analyze_target_met'])}).",
+    ]
+    if demo is not None:
+        lines.append(
+            f"- `gimwatch demo` (the paper's 4-, 10- and 20-link chains, 5 s each, figures, "
+            f"no GIF) takes {demo:.1f} s (target ≤ {DEMO_TARGET_S:g} s: "
+            f"{_verdict(summary['demo_target_met'])})."
+        )
+    simulate = medians.get("gimwatch simulate chain_10")
+    if simulate is not None:
+        lines.append(
+            f"- `gimwatch simulate chain_10` (5 s of the 10-link chain, DOP853 at "
+            f"1e-10, κ and δ watched, results folder with plots) takes {simulate:.1f} s."
+        )
+    return lines
+
+
 def run(context: BenchContext) -> SectionResult:
     """Measure and summarise against the targets."""
     table, medians, code = measure(context)
@@ -148,34 +183,7 @@ def run(context: BenchContext) -> SectionResult:
         "demo_target_met": None if demo is None else demo <= DEMO_TARGET_S,
         FINGERPRINT_KEY: code,
     }
-
-    def verdict(ok: bool | None) -> str:
-        return "—" if ok is None else ("met" if ok else "**not met**")
-
-    lines = [
-        f"- `import gimwatch` costs {import_extra:+.3f} s against `import pinocchio` "
-        f"({medians['import gimwatch']:.3f} s vs {medians['import pinocchio']:.3f} s; "
-        f"target ≤ +{IMPORT_TARGET_S} s: {verdict(summary['import_target_met'])}); with the "
-        f"first names a script uses (`load_robot`, `gim`, `condition_number`, `run_scene`): "
-        f"{first_extra:+.3f} s.",
-        f"- `gimwatch analyze ur5` takes {medians['gimwatch analyze ur5']:.3f} s, "
-        f"{ratio:.2f}x a bare Pinocchio script loading ur5 and running CRBA + `eigvalsh` "
-        f"({medians['bare ur5 (pinocchio crba + eigvalsh)']:.3f} s; target ≤ "
-        f"{ANALYZE_TARGET_RATIO}x: {verdict(summary['analyze_target_met'])}).",
-    ]
-    if demo is not None:
-        lines.append(
-            f"- `gimwatch demo` (the paper's 4-, 10- and 20-link chains, 5 s each, figures, "
-            f"no GIF) takes {demo:.1f} s (target ≤ {DEMO_TARGET_S:g} s: "
-            f"{verdict(summary['demo_target_met'])})."
-        )
-    simulate = medians.get("gimwatch simulate chain_10")
-    if simulate is not None:
-        lines.append(
-            f"- `gimwatch simulate chain_10` (5 s of the 10-link chain, DOP853 at "
-            f"1e-10, κ and δ watched, results folder with plots) takes {simulate:.1f} s."
-        )
-    headline = "\n".join(lines)
+    headline = "\n".join(_findings(medians, summary))
     columns = {
         "case": "process",
         "repeats": "runs",

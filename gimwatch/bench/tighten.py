@@ -56,70 +56,57 @@ def _run(scene):
     return run
 
 
+def _add(table: Table, case: str, mode: str, rtol0: float, run, reference) -> float:
+    """Add a row for ``run`` against ``reference``; return its error (rad)."""
+    error = float(np.max(np.abs(run.q - reference.q)))
+    table.add(
+        case=case,
+        mode=mode,
+        rtol0=rtol0,
+        error_rad=error,
+        wall_time_s=run.wall_time_s,
+        rhs_evaluations=run.rhs_evaluations,
+        actions=len(run.actions) if mode == "tighten" else 0,
+    )
+    return error
+
+
+def _case(context: BenchContext, table: Table, name: str, chain: dict) -> dict:
+    """Run one hard chain: the reference, the fixed tolerances, then ``tighten``."""
+    duration = 0.5 if context.quick else 2.0
+    context.progress(f"  {name}: reference")
+    reference = _run(_scene(chain, duration, {"method": "DOP853", "rtol": 1e-13, "atol": 1e-13}))
+    kappa0 = _run(_scene(chain, 0.02, {"method": "DOP853"}, {"metrics": ["kappa"]})).watch[
+        "watch_kappa"
+    ][0]
+    points = []
+    for rtol in _FIXED[:3] if context.quick else _FIXED:
+        run = _run(_scene(chain, duration, {"method": "RK45", "rtol": rtol, "atol": rtol}))
+        points.append((run.wall_time_s, _add(table, name, "fixed", rtol, run, reference)))
+    watch = {"metrics": ["kappa"], "alarm_threshold": 0.1 * kappa0, "on_alarm": "tighten"}
+    run = _run(_scene(chain, duration, {"method": "RK45", "rtol": _START, "atol": _START}, watch))
+    error = _add(table, name, "tighten", _START, run, reference)
+    # the fixed-tolerance error at the same wall time (log-log interpolation)
+    times, errors = np.log([p[0] for p in points]), np.log([p[1] for p in points])
+    order = np.argsort(times)
+    at_same_time = float(np.exp(np.interp(np.log(run.wall_time_s), times[order], errors[order])))
+    return {
+        "case": name,
+        "kappa0": float(kappa0),
+        "tighten_error": error,
+        "fixed_error_same_time": at_same_time,
+        "ratio": error / at_same_time,
+    }
+
+
 def run(context: BenchContext) -> SectionResult:
     """Time and score fixed tolerances and ``tighten`` on each hard chain."""
-    duration = 0.5 if context.quick else 2.0
-    fixed = _FIXED[:3] if context.quick else _FIXED
     table = Table("tighten", COLUMNS)
-    verdicts = []
-    for name, chain in _CASES.items():
-        context.progress(f"  {name}: reference")
-        reference = _run(
-            _scene(chain, duration, {"method": "DOP853", "rtol": 1e-13, "atol": 1e-13})
-        )
-        kappa0 = _run(_scene(chain, 0.02, {"method": "DOP853"}, {"metrics": ["kappa"]})).watch[
-            "watch_kappa"
-        ][0]
-        points = []
-        for rtol in fixed:
-            run = _run(_scene(chain, duration, {"method": "RK45", "rtol": rtol, "atol": rtol}))
-            error = float(np.max(np.abs(run.q - reference.q)))
-            points.append((run.wall_time_s, error))
-            table.add(
-                case=name,
-                mode="fixed",
-                rtol0=rtol,
-                error_rad=error,
-                wall_time_s=run.wall_time_s,
-                rhs_evaluations=run.rhs_evaluations,
-                actions=0,
-            )
-        watch = {"metrics": ["kappa"], "alarm_threshold": 0.1 * kappa0, "on_alarm": "tighten"}
-        run = _run(
-            _scene(chain, duration, {"method": "RK45", "rtol": _START, "atol": _START}, watch)
-        )
-        error = float(np.max(np.abs(run.q - reference.q)))
-        table.add(
-            case=name,
-            mode="tighten",
-            rtol0=_START,
-            error_rad=error,
-            wall_time_s=run.wall_time_s,
-            rhs_evaluations=run.rhs_evaluations,
-            actions=len(run.actions),
-        )
-        # the fixed-tolerance error at the same wall time (log-log interpolation)
-        times, errors = np.log([p[0] for p in points]), np.log([p[1] for p in points])
-        order = np.argsort(times)
-        at_same_time = float(
-            np.exp(np.interp(np.log(run.wall_time_s), times[order], errors[order]))
-        )
-        verdicts.append(
-            {
-                "case": name,
-                "kappa0": float(kappa0),
-                "tighten_error": error,
-                "fixed_error_same_time": at_same_time,
-                "ratio": error / at_same_time,
-            }
-        )
+    verdicts = [_case(context, table, name, chain) for name, chain in _CASES.items()]
     text = [
         "Largest joint-angle error (rad) vs a DOP853 run at 1e-13, RK45, 2 s gravity swing.",
         "",
-        markdown_table(
-            table.rows,
-            {c: c for c in COLUMNS},
-        ),
+        markdown_table(table.rows, {c: c for c in COLUMNS}),
         "",
         "`tighten` error / fixed-tolerance error at the same wall time (log-log interpolated; "
         "< 1 means tighten buys accuracy per unit of time):",
