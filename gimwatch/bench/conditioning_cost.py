@@ -134,23 +134,23 @@ def _median(table: Table, n: int, method: str) -> float | None:
     return None
 
 
+def _cost_row(table: Table, n: int, methods: list[str]) -> dict:
+    """µs per method at size n, and the speedup of δ on the diagonal over κ by eig."""
+    row: dict = {"n": n}
+    for method in methods:
+        seconds = _median(table, n, method)
+        row[method] = None if seconds is None else seconds * 1e6
+    base, cheap = _median(table, n, "kappa_crba_eigvalsh"), _median(table, n, "delta_on_diagonal")
+    row["speedup"] = base / cheap if base and cheap else None
+    return row
+
+
 def _result(context: BenchContext, table: Table, skipped: list[int]) -> SectionResult:
     figure = context.output / "conditioning_cost.png"
     plot_cost_vs_n(table.rows, figure)
     sizes = sorted({row["n"] for row in table.rows})
     methods = list(dict.fromkeys(row["method"] for row in table.rows))
-    cost_rows = []
-    for n in sizes:
-        row = {"n": n}
-        for method in methods:
-            seconds = _median(table, n, method)
-            row[method] = None if seconds is None else seconds * 1e6
-        base, cheap = (
-            _median(table, n, "kappa_crba_eigvalsh"),
-            _median(table, n, "delta_on_diagonal"),
-        )
-        row["speedup"] = base / cheap if base and cheap else None
-        cost_rows.append(row)
+    cost_rows = [_cost_row(table, n, methods) for n in sizes]
     columns = {"n": "n", **{m: f"{m} (µs)" for m in methods}, "speedup": "κ-eig / δ-O(n)"}
     accuracy_rows = [r for r in table.rows if r["n"] == sizes[-1]]
     summary = {"speedup_delta_on_vs_kappa_eig": {r["n"]: r["speedup"] for r in cost_rows}}

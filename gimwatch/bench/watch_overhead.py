@@ -262,23 +262,39 @@ def measure_solver(context: BenchContext) -> Table:
     return table
 
 
+#: Report headings of the three tables' columns.
+_HEADS = {
+    "robot": "robot",
+    "nv": "nv",
+    "loop": "loop",
+    "metric": "metric",
+    "bare_us": "bare (µs)",
+    "watch_us": "watch (µs)",
+    "step_us": "step (µs)",
+    "watch_vs_bare": "watch / bare",
+    "watch_vs_step": "watch / step",
+}
+_TRACKER_HEADS = {
+    "n": "n",
+    "dense_us": "dense κ (µs)",
+    "tracked_us": "tracked κ (µs)",
+    "tracked_vs_dense": "tracked / dense",
+}
+_SOLVER_HEADS = {
+    "n": "n",
+    "solver": "watch's solver",
+    "numpy_us": "NumPy eigvalsh (µs)",
+    "solver_us": "watch's solve (µs)",
+    "solver_vs_numpy": "watch / NumPy",
+}
+
+
 def run(context: BenchContext) -> SectionResult:
     """Measure the watch's sample against the bare computation and the loop's step."""
     with threadpool_limits(limits=1, user_api="blas"):
         table = measure(context)
         tracker = measure_tracker(context)
         solver = measure_solver(context)
-    columns = {
-        "robot": "robot",
-        "nv": "nv",
-        "loop": "loop",
-        "metric": "metric",
-        "bare_us": "bare (µs)",
-        "watch_us": "watch (µs)",
-        "step_us": "step (µs)",
-        "watch_vs_bare": "watch / bare",
-        "watch_vs_step": "watch / step",
-    }
     text = [
         "One watch sample against the user's own computation of the same quantity "
         "(MuJoCo: `mj_fullM` + `eigvalsh`, `data.M[dof_Madr]` max/min; Pinocchio: `pin.crba` "
@@ -287,34 +303,17 @@ def run(context: BenchContext) -> SectionResult:
         "`Watch.from_mujoco(model, data, ...)`; `pinocchio`: `Watch.from_model(model, ...)`; "
         "`robot`: `Watch(robot, ...)`.",
         "",
-        markdown_table(table.rows, columns),
+        markdown_table(table.rows, _HEADS),
         "",
         "κ per sample along a smooth path on rod chains: the dense solve (`kappa`) against "
         "the O(n) tracker (`kappa_tracked`), both through `Watch(robot, ...)`.",
         "",
-        markdown_table(
-            tracker.rows,
-            {
-                "n": "n",
-                "dense_us": "dense κ (µs)",
-                "tracked_us": "tracked κ (µs)",
-                "tracked_vs_dense": "tracked / dense",
-            },
-        ),
+        markdown_table(tracker.rows, _TRACKER_HEADS),
         "",
         "The watch's dense eigen-solve (`SpectrumSolver`, κ of one matrix) against NumPy's "
         "`eigvalsh` on a symmetric positive definite matrix of each size, ratios within a round.",
         "",
-        markdown_table(
-            solver.rows,
-            {
-                "n": "n",
-                "solver": "watch's solver",
-                "numpy_us": "NumPy eigvalsh (µs)",
-                "solver_us": "watch's solve (µs)",
-                "solver_vs_numpy": "watch / NumPy",
-            },
-        ),
+        markdown_table(solver.rows, _SOLVER_HEADS),
     ]
     worst = {
         m: max(r["watch_vs_bare"] for r in table.rows if r["metric"] == m)

@@ -38,6 +38,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _summary_lines(trajectory) -> list[str]:
+    """The run's summary for stdout: status, cost, drift, watch extremes, estimator quality."""
+    summary = summarize(trajectory)
+    lines = [
+        f"{trajectory.robot}: {trajectory.status}, t = {summary['simulated_time_s']:.4g} s, "
+        f"{trajectory.steps} steps, {trajectory.rhs_evaluations} RHS evaluations, "
+        f"{trajectory.wall_time_s:.3g} s wall",
+    ]
+    if summary["energy_drift_relative"] is not None:
+        lines.append(f"relative energy drift: {summary['energy_drift_relative']:.3g}")
+    for name, value in summary["watch_maxima"].items():
+        if name == "rcond":  # a reciprocal condition number: the smallest is the worst
+            lines.append(f"min rcond: {float(trajectory.watch['watch_rcond'].min()):.6g}")
+        else:
+            lines.append(f"max {name}: {value:.6g}")
+    if summary.get("kappa_tracked_fallbacks"):
+        counts = summary["kappa_tracked_fallbacks"]
+        lines.append("kappa_tracked samples: " + ", ".join(f"{k} {n}" for k, n in counts.items()))
+    quality = summary["estimator_quality"]
+    if isinstance(quality, dict):
+        lines.append(
+            f"estimator: alpha = {quality['alpha']:.4g}, Pearson(log) = "
+            f"{quality['pearson_log']:.3f}, Spearman = {quality['spearman']:.3f}, median rel. "
+            f"error = {quality['median_relative_error']:.3g}, max = "
+            f"{quality['max_relative_error']:.3g}"
+        )
+    return lines
+
+
 def run(args: argparse.Namespace) -> int:
     """Validate, simulate, write; report the status on stderr and a summary on stdout."""
     output = Path(args.output) if args.output else Path("results") / Path(args.scene).stem
@@ -63,37 +92,13 @@ def run(args: argparse.Namespace) -> int:
                 bar.close()
         with LATCH.deferred("soft"):  # a first signal lets the write complete
             folder = write_simulation(trajectory, output)
-    summary = summarize(trajectory)
     for alarm in trajectory.alarms:
         print(
             f"gimwatch: warning: {alarm.metric} = {alarm.value:.4g} > {alarm.threshold:.4g} "
             f"at t = {alarm.time_s:.4g} s",
             file=sys.stderr,
         )
-    lines = [
-        f"{trajectory.robot}: {trajectory.status}, t = {summary['simulated_time_s']:.4g} s, "
-        f"{trajectory.steps} steps, {trajectory.rhs_evaluations} RHS evaluations, "
-        f"{trajectory.wall_time_s:.3g} s wall",
-    ]
-    if summary["energy_drift_relative"] is not None:
-        lines.append(f"relative energy drift: {summary['energy_drift_relative']:.3g}")
-    for name, value in summary["watch_maxima"].items():
-        if name == "rcond":  # a reciprocal condition number: the smallest is the worst
-            lines.append(f"min rcond: {float(trajectory.watch['watch_rcond'].min()):.6g}")
-        else:
-            lines.append(f"max {name}: {value:.6g}")
-    if summary.get("kappa_tracked_fallbacks"):
-        counts = summary["kappa_tracked_fallbacks"]
-        lines.append("kappa_tracked samples: " + ", ".join(f"{k} {n}" for k, n in counts.items()))
-    quality = summary["estimator_quality"]
-    if isinstance(quality, dict):
-        lines.append(
-            f"estimator: alpha = {quality['alpha']:.4g}, Pearson(log) = "
-            f"{quality['pearson_log']:.3f}, Spearman = {quality['spearman']:.3f}, median rel. "
-            f"error = {quality['median_relative_error']:.3g}, max = "
-            f"{quality['max_relative_error']:.3g}"
-        )
-    print("\n".join(lines))
+    print("\n".join(_summary_lines(trajectory)))
     print(f"wrote {folder}", file=sys.stderr)
     if trajectory.status == "interrupted" or LATCH.signum is not None:
         print("gimwatch: interrupted; results so far were written", file=sys.stderr)

@@ -21,6 +21,7 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import TypedDict, Unpack
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +43,7 @@ __all__ = [
     "CHUNK_POINTS",
     "MAX_GRID",
     "ConditioningMap",
+    "Execution",
     "check_metrics",
     "conditioning_map",
     "map_axes",
@@ -216,7 +218,9 @@ def checked_configurations(spec: str, path: str, qs: np.ndarray, *, name: str = 
     return qs
 
 
-def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int], list[str], list]:
+def map_axes(
+    spec: str, path: str, joints: Sequence[str]
+) -> tuple[str, list[int], list[str], list[tuple[float, float]], np.ndarray]:
     """(robot name, q index, unit, (lower, upper)) of each named joint, and the neutral q.
 
     Raises:
@@ -267,6 +271,20 @@ def map_axes(spec: str, path: str, joints: Sequence[str]) -> tuple[str, list[int
         [limits[j] for j in joints],
         neutral,
     )
+
+
+class Execution(TypedDict, total=False):
+    """How a map's chunks run: the keywords `conditioning_map` passes on to `run_chunks`.
+
+    Attributes:
+        workers: Local processes (1, the default: this process).
+        scheduler: A Dask scheduler address or ``"local"`` (then ``workers`` is ignored).
+        progress: Called with the fraction of chunks done.
+    """
+
+    workers: int | None
+    scheduler: str | None
+    progress: Callable[[float], None] | None
 
 
 def run_chunks(
@@ -344,9 +362,7 @@ def conditioning_map(
     q: npt.ArrayLike | None = None,
     metrics: Sequence[str] = ("kappa", "diagonal_ratio"),
     backend: str = "auto",
-    workers: int | None = 1,
-    scheduler: str | None = None,
-    progress: Callable[[float], None] | None = None,
+    **execution: Unpack[Execution],
 ) -> ConditioningMap:
     """Metrics of M over a ``grid`` × ``grid`` map of two joints.
 
@@ -358,9 +374,9 @@ def conditioning_map(
         q: The configuration of the other joints (default: neutral), length nq.
         metrics: Scalar metrics (`scalar_metrics`).
         backend: ``auto``, ``crba`` or ``denoc`` (as ``analyze``).
-        workers: Local processes (1: this process).
-        scheduler: A Dask scheduler address or ``"local"`` (then ``workers`` is ignored).
-        progress: Called with the fraction of chunks done.
+        **execution: How the chunks run (`Execution`): ``workers`` (local processes, 1: this
+            process), ``scheduler`` (a Dask scheduler address or ``"local"``; then ``workers``
+            is ignored), ``progress`` (called with the fraction of chunks done).
     """
     if (
         isinstance(grid, bool)
@@ -398,9 +414,9 @@ def conditioning_map(
         starts,
         (grid, grid),
         metrics,
-        workers=workers,
-        scheduler=scheduler,
-        progress=progress,
+        workers=execution.get("workers", 1),
+        scheduler=execution.get("scheduler"),
+        progress=execution.get("progress"),
     )
     return ConditioningMap(
         robot=name,

@@ -23,7 +23,9 @@ q̈ under gravity alone, and each servo's frequency √(k_i / M_ii) before and a
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TypedDict, Unpack
 
 import numpy as np
 import numpy.typing as npt
@@ -37,7 +39,7 @@ from gimwatch.stability.linear_system import LinearSystem
 from gimwatch.stability.step_maps import EXPLICIT_DAMPING, check_integrator
 from gimwatch.stability.timestep import max_stable_timestep
 
-__all__ = ["TimestepArmaturePlan", "stability_matrix", "timestep_armature"]
+__all__ = ["HoldOptions", "TimestepArmaturePlan", "stability_matrix", "timestep_armature"]
 
 #: Bisection steps of RK4's uniform armature (relative width 2⁻⁴⁰ of the bracket).
 BISECTIONS = 60
@@ -176,6 +178,22 @@ def _bisected(systems, integrator, h):
     return high
 
 
+class HoldOptions(TypedDict, total=False):
+    """How the robot is held: the keywords `timestep_armature` passes on to ``held_systems``.
+
+    Attributes:
+        kp: Servo stiffness (one number or one per coordinate) for robots without actuators.
+        kd: Servo damping, explicit.
+        gravity: Include gravity's stiffness (default True).
+        keyframe: An MJCF keyframe's name to hold.
+    """
+
+    kp: float | Sequence[float] | None
+    kd: float | Sequence[float] | None
+    gravity: bool
+    keyframe: str | None
+
+
 def timestep_armature(
     robot: Robot,
     timestep_s: float,
@@ -183,12 +201,9 @@ def timestep_armature(
     configurations: npt.ArrayLike | None = None,
     *,
     per_joint: bool = False,
-    kp=None,
-    kd=None,
-    gravity: bool = True,
-    keyframe: str | None = None,
     rtol: float = 1e-6,
     margin: float = 1e-6,
+    **hold: Unpack[HoldOptions],
 ) -> TimestepArmaturePlan:
     """The least armature to add so that ``integrator`` is stable at ``timestep_s``.
 
@@ -198,12 +213,13 @@ def timestep_armature(
         integrator: A name from `gimwatch.stability.step_maps.INTEGRATORS`.
         configurations: Held configurations (K, nq); default: keyframe 0, qpos0 or neutral.
         per_joint: One value per coordinate, least total (cutting planes on the LMI).
-        kp: Servo stiffness (one number or one per coordinate) for robots without actuators.
-        kd: Servo damping, explicit.
-        gravity: Include gravity's stiffness.
-        keyframe: An MJCF keyframe's name to hold.
         rtol: Relative optimality gap of the cutting planes.
         margin: Relative amount the answer is raised so that float64 meets the inequality.
+        **hold: How the robot is held (`HoldOptions`, passed on to
+            `gimwatch.stability.analysis.held_systems`): ``kp`` (servo stiffness, one number
+            or one per coordinate, for robots without actuators), ``kd`` (servo damping,
+            explicit), ``gravity`` (include gravity's stiffness, default True), ``keyframe``
+            (an MJCF keyframe's name to hold).
 
     Raises:
         InputError: A timestep ≤ 0, an unknown integrator, per_joint with RK4, bad servos.
@@ -213,9 +229,7 @@ def timestep_armature(
     check_integrator(integrator)
     if per_joint and integrator == "RK4":
         raise InputError("per_joint", "False with RK4 (no LMI: one uniform value, bisected)", True)
-    qs, systems, servos = held_systems(
-        robot, configurations, kp=kp, kd=kd, gravity=gravity, keyframe=keyframe
-    )
+    qs, systems, servos = held_systems(robot, configurations, **hold)
     if integrator == "RK4":
         value = _bisected(systems, integrator, timestep_s)
         added, lower, method = np.full(robot.nv, value), robot.nv * value, "bisection"

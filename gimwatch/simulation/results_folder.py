@@ -17,6 +17,7 @@ of other files is never replaced.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -124,7 +125,7 @@ def _plots(trajectory: Trajectory, folder: Path) -> None:
         fig.suptitle(title, fontsize="medium")
         fig.savefig(folder / name, dpi=110)
 
-    t, watch = trajectory.t, trajectory.watch
+    t = trajectory.t
     names, units = _coordinate_names_and_units(trajectory)
     save(
         "joints.png",
@@ -132,9 +133,17 @@ def _plots(trajectory: Trajectory, folder: Path) -> None:
     )
     if trajectory.energy is not None and trajectory.energy.size:
         save("energy.png", lambda ax: plots.plot_energy(t, trajectory.energy, ax=ax))
-    wt = watch.get("watch_t")
-    if wt is None or wt.size == 0:
-        return
+    wt = trajectory.watch.get("watch_t")
+    if wt is not None and wt.size:
+        _watch_plots(trajectory, save)
+
+
+def _watch_plots(trajectory: Trajectory, save: Callable) -> None:
+    """The watch's figures, each drawn when the series it plots were watched."""
+    from gimwatch.output import figures as plots
+
+    watch = trajectory.watch
+    wt = watch["watch_t"]
     if "watch_kappa" in watch and "watch_diagonal_ratio" in watch:
         save(
             "kappa_delta.png",
