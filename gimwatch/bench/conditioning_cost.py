@@ -18,16 +18,16 @@ built for that size only when the machine has room for it, and freed before the 
 
 from __future__ import annotations
 
-import gc
 from functools import partial
 
 import numpy as np
 import scipy.linalg
 
 from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench.compare import Case, Comparison, run_comparison
 from gimwatch.bench.plots import plot_cost_vs_n
 from gimwatch.bench.report import markdown_table
-from gimwatch.bench.timing import data_if_it_fits, time_call
+from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.metrics.conditioning import (
     condition_estimate_1norm,
     condition_number,
@@ -38,7 +38,7 @@ from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
 
-__all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "run"]
+__all__ = ["COLUMNS", "COMPARISON", "FULL_SIZES", "QUICK_SIZES", "run"]
 
 FULL_SIZES = (4, 10, 20, 50, 100, 200, 300, 400, 500)
 QUICK_SIZES = (4, 8)
@@ -82,49 +82,58 @@ def _methods(robot, q, data) -> dict:
     }
 
 
+def _case(n: int, context: BenchContext) -> Case | None:
+    robot = load_robot(f"chain:{n}")
+    data = data_if_it_fits(robot)
+    if data is None:
+        context.progress(f"  n = {n}: skipped, a Pinocchio Data would not fit in memory")
+        return None
+    q = random_configurations(robot, 1, seed=context.seed)[0]
+    kappa = extreme_ratio(scipy.linalg.eigvalsh(gim(robot, q, data=data)))
+    methods = _methods(robot, q, data)
+    facts = {"n": n, "robot": robot, "q": q, "data": data, "kappa": kappa, "methods": methods}
+    return Case(f"n = {n}", methods, facts)
+
+
+def _rows(case: Case) -> list[dict]:
+    f, rows = case.facts, []
+    for method, fn in f["methods"].items():
+        timing, estimate = case.timings[method], float(fn())
+        assert timing is not None  # every method is timed at every size it runs
+        products = (
+            kappa_matrix_free(
+                f["robot"], f["q"], data=f["data"], seed=0, tol=float(method.split("_")[-1])
+            ).products
+            if method.startswith("kappa_lanczos")
+            else None
+        )
+        rows.append(
+            {
+                "n": f["n"],
+                "method": method,
+                "median_s": timing.median_s,
+                "min_s": timing.min_s,
+                "calls_per_round": timing.number,
+                "estimate": estimate,
+                "kappa_exact": f["kappa"],
+                "ratio_to_kappa": estimate / f["kappa"],
+                "rel_error": abs(estimate - f["kappa"]) / f["kappa"],
+                "products": products,
+            }
+        )
+    return rows
+
+
+#: Each method against the exact κ, per chain size.
+COMPARISON = Comparison("conditioning", COLUMNS, FULL_SIZES, QUICK_SIZES, _case, _rows)
+
+
 def run(context: BenchContext) -> SectionResult:
     """Time each method against n and write ``conditioning.csv`` and its plot."""
+    table = run_comparison(COMPARISON, context)
     sizes = QUICK_SIZES if context.quick else FULL_SIZES
-    repeats, min_round = (3, 0.002) if context.quick else (7, 0.02)
-    table = Table("conditioning", COLUMNS)
-    skipped = []
-    for n in sizes:
-        robot = load_robot(f"chain:{n}")
-        data = data_if_it_fits(robot)
-        if data is None:
-            skipped.append(n)
-            context.progress(f"  n = {n}: skipped, a Pinocchio Data would not fit in memory")
-            continue
-        q = random_configurations(robot, 1, seed=context.seed)[0]
-        M = gim(robot, q, data=data)
-        values = scipy.linalg.eigvalsh(M)
-        kappa = extreme_ratio(values)
-        for method, fn in _methods(robot, q, data).items():
-            context.progress(f"  n = {n}: {method}")
-            timing = time_call(fn, repeats=repeats, min_round_s=min_round)
-            estimate = float(fn())
-            products = (
-                kappa_matrix_free(
-                    robot, q, data=data, seed=0, tol=float(method.split("_")[-1])
-                ).products
-                if method.startswith("kappa_lanczos")
-                else None
-            )
-            table.add(
-                n=n,
-                method=method,
-                median_s=timing.median_s,
-                min_s=timing.min_s,
-                calls_per_round=timing.number,
-                estimate=estimate,
-                kappa_exact=kappa,
-                ratio_to_kappa=estimate / kappa,
-                rel_error=abs(estimate - kappa) / kappa,
-                products=products,
-            )
-        del data, M
-        gc.collect()
-    return _result(context, table, skipped)
+    measured = {row["n"] for row in table.rows}
+    return _result(context, table, [n for n in sizes if n not in measured])
 
 
 def _median(table: Table, n: int, method: str) -> float | None:

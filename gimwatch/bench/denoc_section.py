@@ -15,26 +15,25 @@ size, else Pinocchio is not timed at that size and the row says so.
 
 from __future__ import annotations
 
-import gc
-import shutil
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 from threadpoolctl import threadpool_limits
 
-from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench import BenchContext, SectionResult
+from gimwatch.bench.compare import Case, Comparison, Rounds, run_comparison
 from gimwatch.bench.plots import plot_denoc_cost
 from gimwatch.bench.report import markdown_table
-from gimwatch.bench.timing import data_if_it_fits, time_call
+from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.crosscheck import denoc_model
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
 from gimwatch.model.inertia import gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
 
-__all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "run"]
+__all__ = ["COLUMNS", "COMPARISON", "FULL_SIZES", "QUICK_SIZES", "run"]
 
 FULL_SIZES = (10, 100, 500)
 QUICK_SIZES = (4,)
@@ -96,45 +95,62 @@ def _cases(dm, robot, data, q, v, a, tau) -> dict[str, tuple[Callable, Callable 
     }
 
 
-def measure(context: BenchContext) -> Table:
-    """Time DeNOC and Pinocchio per size and quantity."""
-    sizes = QUICK_SIZES if context.quick else FULL_SIZES
-    repeats, min_round = (3, 0.002) if context.quick else (5, 0.05)
-    table = Table("denoc", COLUMNS)
-    folder = Path(tempfile.mkdtemp(prefix="gimwatch-bench-"))
-    robots = [(n, lambda n=n: load_robot(f"chain:{n}")) for n in sizes]
-    robots += [(n, lambda n=n: floating_chain(n, folder)) for n in sizes]
-    for n, build in robots:
-        robot = build()
-        dm = denoc_model(robot)
-        rng = np.random.default_rng(context.seed)
-        q = random_configurations(robot, 1, seed=context.seed)[0]
-        v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
-        data = data_if_it_fits(robot)
-        note = "" if data is not None else "Pinocchio not timed: its Data would not fit in memory"
-        for quantity, (denoc_call, pin_call) in _cases(dm, robot, data, q, v, a, tau).items():
-            context.progress(f"  chain:{n}{' floating' * robot.floating}: {quantity}")
-            denoc_us = time_call(denoc_call, repeats=repeats, min_round_s=min_round).median_s
-            pin_us = (
-                time_call(pin_call, repeats=repeats, min_round_s=min_round).median_s
-                if data is not None
-                else float("nan")
-            )
-            why = note or (
-                "Pinocchio side: gimwatch's O(n) diagonal" if quantity == "gim_diagonal" else ""
-            )
-            table.add(
-                n=n,
-                quantity=quantity,
-                denoc_us=denoc_us * 1e6,
-                pinocchio_us=pin_us * 1e6,
-                ratio=denoc_us / pin_us,
-                note=why,
-            )
-        del data
-        gc.collect()
-    shutil.rmtree(folder, ignore_errors=True)
-    return table
+def _case(size: tuple[int, bool], context: BenchContext) -> Case:
+    n, floating = size
+    folder = tempfile.TemporaryDirectory(prefix="gimwatch-bench-")  # removed with the case
+    robot = floating_chain(n, Path(folder.name)) if floating else load_robot(f"chain:{n}")
+    dm = denoc_model(robot)
+    rng = np.random.default_rng(context.seed)
+    q = random_configurations(robot, 1, seed=context.seed)[0]
+    v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
+    data = data_if_it_fits(robot)
+    cases = _cases(dm, robot, data, q, v, a, tau)
+    calls = {}
+    for quantity, (denoc_call, pin_call) in cases.items():
+        calls[f"{quantity}, DeNOC"] = denoc_call
+        calls[f"{quantity}, Pinocchio"] = pin_call if data is not None else None
+    facts = {"n": n, "quantities": tuple(cases), "folder": folder, "timed_pinocchio": data}
+    return Case(f"chain:{n}{' floating' * floating}", calls, facts)
+
+
+def _rows(case: Case) -> Iterator[dict]:
+    note = (
+        ""
+        if case.facts["timed_pinocchio"] is not None
+        else "Pinocchio not timed: its Data would not fit in memory"
+    )
+    for quantity in case.facts["quantities"]:
+        denoc = case.timings[f"{quantity}, DeNOC"]
+        pinocchio = case.timings[f"{quantity}, Pinocchio"]
+        denoc_s = denoc.median_s if denoc else float("nan")
+        pin_s = pinocchio.median_s if pinocchio else float("nan")
+        why = note or (
+            "Pinocchio side: gimwatch's O(n) diagonal" if quantity == "gim_diagonal" else ""
+        )
+        yield {
+            "n": case.facts["n"],
+            "quantity": quantity,
+            "denoc_us": denoc_s * 1e6,
+            "pinocchio_us": pin_s * 1e6,
+            "ratio": denoc_s / pin_s,
+            "note": why,
+        }
+
+
+def _sizes(ns: tuple[int, ...]) -> tuple[tuple[int, bool], ...]:
+    return tuple((n, False) for n in ns) + tuple((n, True) for n in ns)
+
+
+#: DeNOC against Pinocchio per quantity, on fixed then floating chains of each size.
+COMPARISON = Comparison(
+    "denoc",
+    COLUMNS,
+    _sizes(FULL_SIZES),
+    _sizes(QUICK_SIZES),
+    _case,
+    _rows,
+    Rounds(repeats=5, min_round_s=0.05),
+)
 
 
 #: Issue 16: DeNOC forward dynamics ≤ 3× ABA at n = 10 and ≤ 1.2× at n ≥ 100 (both bases).
@@ -162,7 +178,7 @@ def run(context: BenchContext) -> SectionResult:
     """Measure, plot ``denoc_cost.png`` and summarise the ratios."""
     # BLAS on one thread, set here: the CLI's limit misses an OpenBLAS loaded after it
     with threadpool_limits(limits=1, user_api="blas"):
-        table = measure(context)
+        table = run_comparison(COMPARISON, context)
     figure = plot_denoc_cost(table.rows, context.output / "denoc_cost.png")
     columns = {
         "n": "n",

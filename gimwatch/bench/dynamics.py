@@ -15,19 +15,21 @@ before the next backend.
 
 from __future__ import annotations
 
-import gc
+from collections.abc import Callable, Iterator
+from functools import partial
 
 import numpy as np
 
-from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench import BenchContext, SectionResult
+from gimwatch.bench.compare import Case, Comparison, run_comparison
 from gimwatch.bench.plots import plot_dynamics_cost
 from gimwatch.bench.report import markdown_table
-from gimwatch.bench.timing import data_if_it_fits, time_call
+from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.errors import RobotError
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot, load_robot, random_configurations
 from gimwatch.simulation.backends import BACKENDS
 
-__all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "run"]
+__all__ = ["COLUMNS", "COMPARISON", "FULL_SIZES", "QUICK_SIZES", "run"]
 
 FULL_SIZES = (10, 100, 500)
 QUICK_SIZES = (4,)
@@ -64,50 +66,45 @@ def _backend(name: str, robot: Robot):
         )
 
 
-def measure(context: BenchContext) -> Table:
-    """Time each backend's forward dynamics per chain size."""
-    sizes = QUICK_SIZES if context.quick else FULL_SIZES
-    repeats, min_round = (3, 0.002) if context.quick else (7, 0.02)
-    table = Table("dynamics", COLUMNS)
-    for n in sizes:
-        robot = load_robot(f"chain:{n}")
-        rng = np.random.default_rng(context.seed)
-        q = random_configurations(robot, 1, seed=context.seed)[0]
-        v, tau = rng.standard_normal(robot.nv), rng.standard_normal(robot.nv)
-        aba_us = None
-        for name in BACKENDS:
-            context.progress(f"  chain:{n}: {name}")
-            backend, note = _backend(name, robot)
-            if backend is None:
-                row = {"call_us": np.nan, "min_us": np.nan, "calls_per_round": 0}
-            else:
-                timing = time_call(
-                    lambda b=backend, q=q, v=v, tau=tau: b.forward_dynamics(q, v, tau),
-                    repeats=repeats,
-                    min_round_s=min_round,
-                )
-                row = {
-                    "call_us": timing.median_s * 1e6,
-                    "min_us": timing.min_s * 1e6,
-                    "calls_per_round": timing.number,
-                }
-            if name == "aba":
-                aba_us = row["call_us"]
-            table.add(
-                n=n,
-                backend=name,
-                vs_aba=row["call_us"] / aba_us if aba_us else np.nan,
-                note=note,
-                **row,
-            )
-            del backend
-            gc.collect()
-    return table
+def _calls(case: Case, robot: Robot) -> Iterator[tuple[str, Callable[[], object] | None]]:
+    """Each backend's forward dynamics at the case's state, built when it is timed."""
+    q, v, tau = case.facts["state"]
+    for name in BACKENDS:
+        backend, case.facts[f"note:{name}"] = _backend(name, robot)
+        yield name, (None if backend is None else partial(backend.forward_dynamics, q, v, tau))
+        del backend  # its Data before the next backend's (gigabytes past nv = 400)
+
+
+def _case(n: int, context: BenchContext) -> Case:
+    robot = load_robot(f"chain:{n}")
+    rng = np.random.default_rng(context.seed)
+    q = random_configurations(robot, 1, seed=context.seed)[0]
+    case = Case(f"chain:{n}", (), {"n": n, "state": (q, *rng.standard_normal((2, robot.nv)))})
+    case.calls = _calls(case, robot)
+    return case
+
+
+def _rows(case: Case) -> Iterator[dict]:
+    aba = case.timings["aba"]
+    for name, timing in case.timings.items():
+        yield {
+            "n": case.facts["n"],
+            "backend": name,
+            "call_us": np.nan if timing is None else timing.median_s * 1e6,
+            "min_us": np.nan if timing is None else timing.min_s * 1e6,
+            "calls_per_round": 0 if timing is None else timing.number,
+            "vs_aba": timing.median_s / aba.median_s if timing and aba else np.nan,
+            "note": case.facts[f"note:{name}"],
+        }
+
+
+#: Every registered backend's forward dynamics, per chain size, against ``aba``.
+COMPARISON = Comparison("dynamics", COLUMNS, FULL_SIZES, QUICK_SIZES, _case, _rows)
 
 
 def run(context: BenchContext) -> SectionResult:
     """Measure, plot ``dynamics_cost.png`` and tabulate the ratios to ``aba``."""
-    table = measure(context)
+    table = run_comparison(COMPARISON, context)
     figure = plot_dynamics_cost(table.rows, context.output / "dynamics_cost.png")
     columns = {
         "n": "n",

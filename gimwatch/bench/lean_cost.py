@@ -25,23 +25,24 @@ freed before the next size.
 
 from __future__ import annotations
 
-import gc
+from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
 from threadpoolctl import threadpool_limits
 
-from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench import BenchContext, SectionResult
+from gimwatch.bench.compare import Case, Comparison, run_comparison
 from gimwatch.bench.report import markdown_table
-from gimwatch.bench.timing import data_if_it_fits, time_call
+from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.metrics.conditioning import diagonal_ratio
 from gimwatch.model.inertia import gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
 from gimwatch.simulation.backends import DenocBackend
 from gimwatch.watch.watch import Watch
 
-__all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "TARGETS", "run"]
+__all__ = ["COLUMNS", "COMPARISON", "FULL_SIZES", "QUICK_SIZES", "TARGETS", "run"]
 
 FULL_SIZES = (20, 100, 200, 500)
 QUICK_SIZES = (4, 8)
@@ -91,62 +92,64 @@ def _watch_sampler(watch: Watch, qs: np.ndarray):
     return sample
 
 
-def _pinocchio_costs(robot, data, q, v, tau, timed) -> tuple[float, float, float, float]:
-    """µs of (δ by the Pinocchio route, one ABA call, a bare RK4 step, κ by CRBA + eigvalsh)."""
+def _pinocchio_calls(robot, data, q, v, tau) -> dict[str, Callable[[], object] | None]:
+    """δ by the Pinocchio route, one ABA call, a bare RK4 step, κ by CRBA + eigvalsh."""
+    if data is None:
+        return dict.fromkeys(_PINOCCHIO)
     model = pin.Model(robot.model)
     model.gravity = pin.Motion(GRAVITY, np.zeros(3))
-    return (
-        timed(lambda: diagonal_ratio(gim_diagonal(robot, q, data=data))),
-        timed(lambda: pin.aba(model, data, q, v, tau)),
-        timed(_rk4_step(model, data, q, v, tau)),
-        timed(lambda: scipy.linalg.eigvalsh(pin.crba(model, data, q), check_finite=False)),
-    )
+    return {
+        "delta_pinocchio_us": lambda: diagonal_ratio(gim_diagonal(robot, q, data=data)),
+        "aba_call_us": lambda: pin.aba(model, data, q, v, tau),
+        "rk4_step_us": _rk4_step(model, data, q, v, tau),
+        "kappa_eig_us": lambda: scipy.linalg.eigvalsh(pin.crba(model, data, q), check_finite=False),
+    }
 
 
-def measure(context: BenchContext) -> Table:
-    """Time the δ routes, ABA, an RK4 step and κ by eig per chain size."""
-    sizes = QUICK_SIZES if context.quick else FULL_SIZES
-    repeats, min_round = (3, 0.002) if context.quick else (7, 0.02)
-    table = Table("lean", COLUMNS)
-    for n in sizes:
-        context.progress(f"  chain:{n}")
-        robot = load_robot(f"chain:{n}")
-        qs = random_configurations(robot, 16, seed=context.seed)
-        rng = np.random.default_rng(context.seed)
-        v, tau = rng.standard_normal((2, robot.nv))
-        backend = DenocBackend(robot, GRAVITY)  # its LeanModel: no Pinocchio Data needed
-        watch = Watch(robot, ("diagonal_ratio",))  # as a user builds it (docs/watch.md)
-        lean = backend.lean
+_PINOCCHIO = ("delta_pinocchio_us", "aba_call_us", "rk4_step_us", "kappa_eig_us")
 
-        def timed(fn, repeats=repeats, min_round=min_round) -> float:
-            return time_call(fn, repeats=repeats, min_round_s=min_round).median_s * 1e6
 
-        delta_watch = timed(_watch_sampler(watch, qs))
-        q0 = qs[0]
-        delta_lean = timed(lambda lean=lean, q0=q0: lean.diagonal_ratio(q0))
-        data = data_if_it_fits(robot)
-        if data is None:
-            note = "Pinocchio not timed: its Data would not fit in memory"
-            pin_delta = aba = step = eig = float("nan")
-        else:
-            note = "" if n <= 400 else "Pinocchio Data built past the library's limit"
-            pin_delta, aba, step, eig = _pinocchio_costs(robot, data, qs[0], v, tau, timed)
-        table.add(
-            n=n,
-            delta_watch_us=delta_watch,
-            delta_lean_us=delta_lean,
-            delta_pinocchio_us=pin_delta,
-            aba_call_us=aba,
-            rk4_step_us=step,
-            watch_vs_aba_call=delta_watch / aba,
-            watch_vs_rk4_step=delta_watch / step,
-            kappa_eig_us=eig,
-            kappa_eig_vs_delta=eig / delta_lean,
-            note=note,
-        )
-        del data
-        gc.collect()
-    return table
+def _case(n: int, context: BenchContext) -> Case:
+    robot = load_robot(f"chain:{n}")
+    qs = random_configurations(robot, 16, seed=context.seed)
+    rng = np.random.default_rng(context.seed)
+    v, tau = rng.standard_normal((2, robot.nv))
+    lean = DenocBackend(robot, GRAVITY).lean  # its LeanModel: no Pinocchio Data needed
+    watch = Watch(robot, ("diagonal_ratio",))  # as a user builds it (docs/watch.md)
+    q0 = qs[0]
+    calls = {
+        "delta_watch_us": _watch_sampler(watch, qs),
+        "delta_lean_us": lambda: lean.diagonal_ratio(q0),
+    }
+    data = data_if_it_fits(robot)
+    calls.update(_pinocchio_calls(robot, data, q0, v, tau))
+    if data is None:
+        note = "Pinocchio not timed: its Data would not fit in memory"
+    else:
+        note = "" if n <= 400 else "Pinocchio Data built past the library's limit"
+    return Case(f"chain:{n}", calls, {"n": n, "note": note})
+
+
+def _row(case: Case) -> list[dict]:
+    us = {
+        name: float("nan") if timing is None else timing.median_s * 1e6
+        for name, timing in case.timings.items()
+    }
+    watch = us["delta_watch_us"]
+    return [
+        {
+            "n": case.facts["n"],
+            **us,
+            "watch_vs_aba_call": watch / us["aba_call_us"],
+            "watch_vs_rk4_step": watch / us["rk4_step_us"],
+            "kappa_eig_vs_delta": us["kappa_eig_us"] / us["delta_lean_us"],
+            "note": case.facts["note"],
+        }
+    ]
+
+
+#: The δ routes against ABA, an RK4 step and κ by eig, one row per chain size.
+COMPARISON = Comparison("lean", COLUMNS, FULL_SIZES, QUICK_SIZES, _case, _row)
 
 
 def verdicts(rows: list[dict]) -> list[str]:
@@ -174,7 +177,7 @@ def run(context: BenchContext) -> SectionResult:
     """Measure and summarise against the δ cost targets."""
     # BLAS on one thread, set here: the CLI's limit misses an OpenBLAS loaded after it
     with threadpool_limits(limits=1, user_api="blas"):
-        table = measure(context)
+        table = run_comparison(COMPARISON, context)
     columns = {
         "n": "n",
         "delta_watch_us": "δ watch sample (µs)",
