@@ -172,6 +172,7 @@ def run_bench(
             raise InputError(f"bench section {name!r}", "available", reason)
     with ResultsFolder(output, writer="bench", keep_previous=True) as folder:
         staging = folder.staging
+        assert staging is not None  # set on entering the folder
         context = BenchContext(output=staging, quick=quick, progress=progress, seed=seed)
         progress("measuring the environment (BLAS threads)")
         env = environment(quick=quick)

@@ -18,6 +18,9 @@ Backward-stable solvers give errors up to about κ·eps.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
@@ -43,7 +46,7 @@ def _spec(family: str, n: int):
     if family == "tapered":
         ratio = np.geomspace(1.0, 0.01, n) if n > 1 else np.ones(1)
         lengths = np.geomspace(1.0, 0.1, n) if n > 1 else np.ones(1)
-        return chain_spec(n, mass_kg=2.2 * ratio, length_m=lengths)
+        return chain_spec(n, mass_kg=list(2.2 * ratio), length_m=list(lengths))
     return chain_spec(n)
 
 
@@ -65,7 +68,7 @@ def _denoc_method(robot: Robot):
     return lambda q, v, tau: np.asarray(dm.forward_dynamics(q, v, tau, gravity=gravity))
 
 
-def _methods(robot: Robot) -> dict:
+def _methods(robot: Robot) -> tuple[dict[str, Callable], Any]:
     model = robot.model
     data = robot.new_data()
 
@@ -198,7 +201,7 @@ def _result(table: Table, figure, sizes) -> SectionResult:
 
 def _advice(median: dict, worst: dict) -> str:
     """Which method to trust when, read off the measured error/(κ·eps) ratios."""
-    ranking = sorted(median, key=median.get)
+    ranking = sorted(median, key=lambda method: median[method])
     best, last = ranking[0], ranking[-1]
     above = [m for m in worst if worst[m] > 1.0]
     parts = [

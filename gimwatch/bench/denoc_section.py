@@ -105,7 +105,7 @@ def _case(size: tuple[int, bool], context: BenchContext) -> Case:
     v, a, tau = (rng.standard_normal(robot.nv) for _ in range(3))
     data = data_if_it_fits(robot)
     cases = _cases(dm, robot, data, q, v, a, tau)
-    calls = {}
+    calls: dict[str, Callable[[], object] | None] = {}
     for quantity, (denoc_call, pin_call) in cases.items():
         calls[f"{quantity}, DeNOC"] = denoc_call
         calls[f"{quantity}, Pinocchio"] = pin_call if data is not None else None

@@ -20,6 +20,7 @@ scaling-invariant bound of Cholesky holds: error ≲ c·κ_S·eps). Predictors o
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from typing import Any
 
 import mpmath
 import numpy as np
@@ -116,8 +117,9 @@ def scaled_urdf(urdf_xml: str, factor: float) -> str:
         limit = joint.find("limit")
         if joint.get("type") == "prismatic" and limit is not None:
             for key in ("lower", "upper"):
-                if limit.get(key) is not None:
-                    limit.set(key, repr(float(limit.get(key)) * factor))
+                value = limit.get(key)
+                if value is not None:
+                    limit.set(key, repr(float(value) * factor))
     return ET.tostring(root, encoding="unicode")
 
 
@@ -305,7 +307,9 @@ def _numeric(rows: list[dict]) -> list[dict]:
 
 def solver_table(rows: list[dict]) -> str:
     """Per solver, worst over every case and unit: the Markdown table the findings quote."""
-    wide = [{"solver": s, **v} for s, v in summary_by_solver(_numeric(rows)).items()]
+    wide: list[dict[str, Any]] = [
+        {"solver": s, **v} for s, v in summary_by_solver(_numeric(rows)).items()
+    ]
     for row in wide:
         row["rows"] = int(row["rows"])
     columns = {

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from functools import partial
+from typing import cast
 
 import numpy as np
 
@@ -61,7 +62,7 @@ def _backend(name: str, robot: Robot):
         data = data_if_it_fits(robot)
         if data is None:
             return None, f"not timed: a Pinocchio Data for nv = {robot.nv} would not fit ({exc})"
-        return cls(_LargeRobot(robot, data), GRAVITY), (
+        return cls(cast(Robot, _LargeRobot(robot, data)), GRAVITY), (
             f"Data built past nv = {DATA_NV_LIMIT} for this benchmark"
         )
 

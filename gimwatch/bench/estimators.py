@@ -24,6 +24,8 @@ Estimators (Shah & Saha 2013 and the free Rayleigh bounds, since M_ii = e_iᵀ M
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pinocchio as pin
 
@@ -94,7 +96,7 @@ class _Estimators:
         kappa0 = condition_number(M0)
         self.alpha_delta = kappa0 / diagonal_ratio(M0)
         self.alpha_pivot = kappa0 / pivot_ratio_forward(M0)
-        self.start = None
+        self.start: tuple[np.ndarray, np.ndarray] | None = None
 
     def __call__(self, name: str, q: np.ndarray, *, keep_start: bool = True) -> float:
         robot, data = self.robot, self.data
@@ -115,10 +117,15 @@ class _Estimators:
             return condition_estimate_1norm(gim(robot, q, data=data))
         if name == "lanczos_warm":
             result = kappa_matrix_free(robot, q, data=data, seed=0, tol=1e-3, start=self.start)
-            if keep_start:
+            if keep_start and result.vector_max is not None and result.vector_min is not None:
                 self.start = (result.vector_max, result.vector_min)
             return result.kappa
         raise KeyError(name)
+
+    def from_start(self, q: np.ndarray, start) -> float:
+        """``lanczos_warm`` at q from the same ``start`` each time (its timed call)."""
+        self.start = start
+        return self("lanczos_warm", q, keep_start=False)
 
 
 def _sweep(context: BenchContext, table: Table, spec: str, sweep: str, count: int) -> None:
@@ -133,13 +140,13 @@ def _sweep(context: BenchContext, table: Table, spec: str, sweep: str, count: in
     estimators = _Estimators(robot, data, qs[0])
     repeats, min_round = (3, 0.001) if context.quick else (5, 0.01)
     timed = qs[1 : 1 + (2 if context.quick else 4)]
+
+    def kappa_at(q: np.ndarray) -> float:
+        return condition_number(gim(robot, q, data=data))
+
     kappa_cost = np.median(
         [
-            time_call(
-                lambda q=q: condition_number(gim(robot, q, data=data)),
-                repeats=repeats,
-                min_round_s=min_round,
-            ).median_s
+            time_call(partial(kappa_at, q), repeats=repeats, min_round_s=min_round).median_s
             for q in timed
         ]
     )
@@ -152,17 +159,9 @@ def _sweep(context: BenchContext, table: Table, spec: str, sweep: str, count: in
             if name == "lanczos_warm":  # warm start from the previous sample each time
                 estimators.start = None
                 estimators(name, previous)
-                start = estimators.start
-
-                def call(q=q, start=start, name=name) -> float:
-                    estimators.start = start
-                    return estimators(name, q, keep_start=False)
-
+                call = partial(estimators.from_start, q, estimators.start)
             else:
-
-                def call(q=q, name=name) -> float:
-                    return estimators(name, q)
-
+                call = partial(estimators, name, q)
             costs.append(time_call(call, repeats=repeats, min_round_s=min_round).median_s)
         table.add(
             robot=robot.name,

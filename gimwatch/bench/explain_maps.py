@@ -40,7 +40,8 @@ def measure(context: BenchContext) -> Table:
         if context.quick:  # a smoke run: in this process, no worker start-up
             grid, workers = quick_grid, 1
             spec = spec.replace("1000", "100").replace("0500", "050").replace("0001", "001")
-            joints = tuple(j.replace("0500", "050").replace("0001", "001") for j in joints)
+            x, y = (j.replace("0500", "050").replace("0001", "001") for j in joints)
+            joints = (x, y)
         context.progress(f"  {spec}: {grid} x {grid} on the {path} path, {workers} worker(s)")
         start = time.perf_counter()
         result = conditioning_map(

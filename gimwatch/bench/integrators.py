@@ -94,7 +94,8 @@ def _simulate(table: dict, integrator: dict, cap_s: float):
     # the bench caps runs by wall time (cap_s), not by the scenes' default step budget
     integrator = {**integrator, "max_steps": MAX_FIXED_STEPS}
     scene = parse_scene({**table, "integrator": integrator}, source="<bench integrators>")
-    walls, trajectory = [], None
+    walls: list[float] = []
+    trajectory = None
     while len(walls) < (3 if not walls or walls[0] < 0.5 else 1):
         simulation = Simulation(scene)
         start = time.perf_counter()
@@ -183,6 +184,7 @@ def _gimwatch_runs(context, table: Table, ref: _Reference, grid: _Grid) -> None:
 
 def _mujoco_runs(context, table: Table, ref: _Reference, steps) -> None:
     simulation = Simulation(parse_scene(ref.scene, source="<bench integrators>"))
+    assert simulation.gravity is not None  # the chain scenes swing under gravity
     model = mujoco_peer.load_model(simulation.robot.urdf_xml, simulation.gravity)
     for method in FIXED:
         for dt in steps:

@@ -28,7 +28,7 @@ import scipy.linalg
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
-from gimwatch.denoc import DenocModel, extreme_eigenvalues
+from gimwatch.denoc import ConfigurationState, DenocModel, extreme_eigenvalues
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
@@ -110,6 +110,7 @@ def _kappa_table(context: BenchContext, sizes) -> Table:
     for n in sizes:
         model = DenocModel.from_chain(chain_spec(n))
         state = model.state(np.zeros(n))
+        assert isinstance(state, ConfigurationState)  # a chain's model is not the lean one
         context.progress(f"  n = {n}: kappa, matrix-free and dense")
         start = time.perf_counter()
         found = extreme_eigenvalues(state, seed=context.seed)

@@ -12,6 +12,8 @@ time or RHS count).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from gimwatch.bench import BenchContext, SectionResult, Table
@@ -22,7 +24,7 @@ from gimwatch.simulation.simulate import Simulation
 __all__ = ["COLUMNS", "run"]
 
 COLUMNS = ("case", "mode", "rtol0", "error_rad", "wall_time_s", "rhs_evaluations", "actions")
-_CASES = {
+_CASES: dict[str, dict[str, Any]] = {
     "straight-20": {"n": 20},
     "feather-root-12": {
         "n": 12,

@@ -125,8 +125,9 @@ def measure(context: BenchContext) -> Table:
         rng = np.random.default_rng(context.seed)  # hinge joints only: angles in ±1 rad
         qpos0 = model.qpos0 + rng.uniform(-1.0, 1.0, model.nq)
         makers = {label: _sampler(model, *watch) for label, watch in WATCHES.items()}
-        bare, loops = [], {label: [] for label in WATCHES}
-        samples = {label: [] for label in WATCHES}
+        bare: list[float] = []
+        loops: dict[str, list[float]] = {label: [] for label in WATCHES}
+        samples: dict[str, list[float]] = {label: [] for label in WATCHES}
         context.progress(f"  {spec}: {repeats} x (bare mj_step, {len(WATCHES)} watches)")
         for _ in range(repeats):
             bare.append(_loop_s(mujoco, model, qpos0, steps))

@@ -171,7 +171,9 @@ def measure(context: BenchContext) -> Table:
         for loop, build in loops:
             step, cases = build(robot, context.seed)
             context.progress(f"  {spec} ({loop}): {rounds} rounds")
-            times = {key: [] for key in ("step", *[f"{m}/{s}" for m in cases for s in "bw"])}
+            times: dict[str, list[float]] = {
+                key: [] for key in ("step", *[f"{m}/{s}" for m in cases for s in "bw"])
+            }
             for call in (step, *[c for pair in cases.values() for c in pair]):
                 call()  # warm-up: compiled kernels, buffers
             for _ in range(rounds):
@@ -207,7 +209,7 @@ def measure_tracker(context: BenchContext) -> Table:
         start, direction = rng.uniform(-1.0, 1.0, n), rng.uniform(-1.0, 1.0, n)
         path = [start + 1e-3 * k * direction for k in range(samples)]
         context.progress(f"  chain:{n}: dense κ against the tracker, {rounds} rounds")
-        times = {"kappa": [], "kappa_tracked": []}
+        times: dict[str, list[float]] = {"kappa": [], "kappa_tracked": []}
         for _ in range(rounds):
             for metric in times:
                 watch = Watch(robot, (metric,))
@@ -247,11 +249,13 @@ def measure_solver(context: BenchContext) -> Table:
         numpy_call = lambda M=M: np.linalg.eigvalsh(M)  # noqa: E731 - timed as written
         solver_call = lambda M=M, solver=solver: solver.ratio(M)  # noqa: E731
         numpy_call(), solver_call()
-        numpy_s, solver_s = [], []
-        for _ in range(rounds):
-            numpy_s.append(_per_call_s(numpy_call, calls))
-            solver_s.append(_per_call_s(solver_call, calls))
-        numpy_s, solver_s = np.asarray(numpy_s), np.asarray(solver_s)
+        rounds_s = np.array(
+            [
+                (_per_call_s(numpy_call, calls), _per_call_s(solver_call, calls))
+                for _ in range(rounds)
+            ]
+        )
+        numpy_s, solver_s = rounds_s[:, 0], rounds_s[:, 1]
         table.add(
             n=n,
             solver=_solver_name(n),

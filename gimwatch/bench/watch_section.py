@@ -130,6 +130,7 @@ def measure(context: BenchContext) -> Table:
             step_us = wall / trajectory.steps * 1e6
             if bare_step is None:
                 bare_step, configurations = step_us, trajectory.q
+            assert configurations is not None  # the first watch's run set them
             sample_us = _time_samples(robot, metrics, configurations, repeats)
             table.add(
                 n=n,

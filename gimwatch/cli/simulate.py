@@ -84,7 +84,8 @@ def run(args: argparse.Namespace) -> int:
 
             def progress(fraction: float) -> object:
                 fault_pause("compute")
-                return bar(fraction)
+                bar(fraction)
+                return None
 
             try:
                 trajectory = simulation.run(progress=LATCH.checking(progress))

@@ -226,5 +226,6 @@ def write_simulation(trajectory: Trajectory, directory: str | Path, *, plots: bo
             folder is then left as it was.
     """
     with ResultsFolder(directory, writer="simulate") as folder:
+        assert folder.staging is not None  # set on entering the folder
         write_simulation_files(trajectory, folder.staging, plots=plots)
         return folder.commit()
