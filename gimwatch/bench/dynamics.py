@@ -67,11 +67,11 @@ def _backend(name: str, robot: Robot):
         )
 
 
-def _calls(case: Case, robot: Robot) -> Iterator[tuple[str, Callable[[], object] | None]]:
-    """Each backend's forward dynamics at the case's state, built when it is timed."""
-    q, v, tau = case.facts["state"]
+def _calls(facts: dict, robot: Robot) -> Iterator[tuple[str, Callable[[], object] | None]]:
+    """Each backend's forward dynamics at the state in ``facts``, built when it is timed."""
+    q, v, tau = facts["state"]
     for name in BACKENDS:
-        backend, case.facts[f"note:{name}"] = _backend(name, robot)
+        backend, facts[f"note:{name}"] = _backend(name, robot)
         yield name, (None if backend is None else partial(backend.forward_dynamics, q, v, tau))
         del backend  # its Data before the next backend's (gigabytes past nv = 400)
 
@@ -80,9 +80,8 @@ def _case(n: int, context: BenchContext) -> Case:
     robot = load_robot(f"chain:{n}")
     rng = np.random.default_rng(context.seed)
     q = random_configurations(robot, 1, seed=context.seed)[0]
-    case = Case(f"chain:{n}", (), {"n": n, "state": (q, *rng.standard_normal((2, robot.nv)))})
-    case.calls = _calls(case, robot)
-    return case
+    facts = {"n": n, "state": (q, *rng.standard_normal((2, robot.nv)))}  # q, v, τ
+    return Case(f"chain:{n}", _calls(facts, robot), facts)
 
 
 def _rows(case: Case) -> Iterator[dict]:
