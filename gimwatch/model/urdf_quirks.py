@@ -46,6 +46,7 @@ from __future__ import annotations
 import re
 import warnings
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 
 from gimwatch.errors import URDFError, URDFWarning
 
@@ -224,7 +225,7 @@ def _material_quirks(root: ET.Element) -> list[str]:
             for material in visual.findall("material"):
                 if material.get("name") is None:  # name="" urdfdom reads (Go2 has them)
                     visual.remove(material)
-                    unnamed.append(link.get("name"))
+                    unnamed.append(str(link.get("name")))
     seen, duplicates = set(), []
     for material in root.findall("material"):
         name = material.get("name")
@@ -285,14 +286,14 @@ _LIMIT_FIXES = {
 }
 
 
-def _limit_quirks(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
+def _limit_quirks(root: ET.Element, kinds: dict[str | None, str | None]) -> list[str]:
     found: dict[str, list] = {key: [] for key in _LIMIT_FIXES}
     for joint in root.findall("joint"):
         name, kind = joint.get("name"), joint.get("type")
         limit = joint.find("limit")
         if limit is None and kind in ("revolute", "prismatic"):
             bounds = {"lower": "-" + _UNLIMITED, "upper": _UNLIMITED}
-            limit = ET.SubElement(joint, "limit", effort="0", velocity="0", **bounds)
+            limit = ET.SubElement(joint, "limit", {"effort": "0", "velocity": "0", **bounds})
             found["missing_limit"].append(name)
         if limit is not None:
             _fix_effort_velocity(limit, name, found)
@@ -311,7 +312,7 @@ def _limit_quirks(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
     return fixes
 
 
-def _mimics_of_fixed(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
+def _mimics_of_fixed(root: ET.Element, kinds: dict[str | None, str | None]) -> list[str]:
     followers = [
         f"{joint.get('name')} -> {mimic.get('joint')}"
         for joint in root.findall("joint")
@@ -331,7 +332,7 @@ def _implicit_world(root: ET.Element) -> list[str]:
     if any(link.get("name") == "world" for link in root.findall("link")):
         return []
     joints = [
-        joint.get("name")
+        str(joint.get("name"))
         for joint in root.findall("joint")
         if (parent := joint.find("parent")) is not None and parent.get("link") == "world"
     ]
@@ -342,7 +343,7 @@ def _implicit_world(root: ET.Element) -> list[str]:
     return [f"the undeclared parent link 'world' of {shown} added as the fixed base (massless)"]
 
 
-def fix_tree_quirks(root: ET.Element, source: str, padded: list[str] = ()) -> list[str]:
+def fix_tree_quirks(root: ET.Element, source: str, padded: Sequence[str] = ()) -> list[str]:
     """Normalise, in place, what urdfdom would refuse but M does not depend on.
 
     ``padded``: the attributes `padded_number_attributes` found in the text.

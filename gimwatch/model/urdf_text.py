@@ -207,7 +207,7 @@ def check_urdf_text(
     welded = set() if floating else _welded_to_root(root, base, children)
     fixes += _drop_invalid_welded_inertials(root, welded, source)
     doubtful = [
-        link.get("name")
+        str(link.get("name"))  # every link is named by now (_link_names)
         for link in root.findall("link")
         if not check_link_values(link, source) and link.get("name") not in welded
     ]
@@ -299,7 +299,7 @@ def _check_mimics(root: ET.Element, source: str) -> None:
     freely.
     """
     kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
-    follows: dict[str, str] = {}
+    follows: dict[str | None, str | None] = {}
     ghosts = []
     for joint in root.findall("joint"):
         mimic = joint.find("mimic")
@@ -315,12 +315,12 @@ def _check_mimics(root: ET.Element, source: str) -> None:
         if kinds[target] != "fixed":  # a mimic of a fixed joint is a quirk (urdf_quirks)
             follows[name] = target
     for start in follows:
-        path, joint = [start], follows[start]
-        while joint in follows and joint not in path:
-            path.append(joint)
-            joint = follows[joint]
-        if joint == start:
-            cycle = " -> ".join([*path, start])
+        path, followed = [start], follows[start]
+        while followed in follows and followed not in path:
+            path.append(followed)
+            followed = follows[followed]
+        if followed == start:
+            cycle = " -> ".join(str(name) for name in [*path, start])
             raise URDFError(
                 source, f"<mimic> joints form a cycle ({cycle})", element=f"joint {start!r}"
             )
@@ -338,9 +338,9 @@ def _check_mimics(root: ET.Element, source: str) -> None:
 def _welded_to_root(root: ET.Element, top: str, children: dict[str, list[str]]) -> set[str]:
     """The root link and the links joined to it by fixed joints only (fixed base)."""
     fixed = {
-        joint.find("child").get("link")
+        child.get("link")
         for joint in root.findall("joint")
-        if joint.get("type") == "fixed"
+        if joint.get("type") == "fixed" and (child := joint.find("child")) is not None
     }
     found, stack = set(), [top]
     while stack:
