@@ -36,9 +36,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.linalg
 
-from gimwatch.crosscheck import denoc_model
 from gimwatch.errors import InputError
 from gimwatch.metrics import conditioning
+from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 from gimwatch.stress.cases import CASES, StressCase
