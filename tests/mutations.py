@@ -555,8 +555,8 @@ MUTANTS = (
         # reversed range as "unlimited" first (Bullet's convention): the live code is here
         "urdf-limit-order-ignored",
         "gimwatch/model/urdf_quirks.py",
-        "                if not lower <= upper:\n",
-        "                if not lower <= upper + 1e3:\n",
+        "    if not lower <= upper:\n",
+        "    if not lower <= upper + 1e3:\n",
         URDF_VALUES,
         "a joint limit with lower > upper is neither read as unlimited nor warned about",
     ),
@@ -718,9 +718,9 @@ MUTANTS = (
         "reference-tree-aba-30-digits",
         "gimwatch/stress/reference_tree.py",
         "        with mpmath.workdps(self.dps):\n            X, S = self._joints(q)\n"
-        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        "            twist, bias, _ = self._velocities(X, S, v)\n            U, Dinv",
         "        with mpmath.workdps(30):\n            X, S = self._joints(q)\n"
-        "            twist, bias, _ = self._velocities(X, S, v)\n            IA",
+        "            twist, bias, _ = self._velocities(X, S, v)\n            U, Dinv",
         PRECISION,
         "the tree reference's ABA runs at 30 digits whatever its dps (its 100-digit run too)",
     ),

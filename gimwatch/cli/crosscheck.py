@@ -138,52 +138,61 @@ def _status(results: list) -> int:
     return 0 if all(r.status == "passed" for r in results) else 1
 
 
+def _loaded(args: argparse.Namespace, specs: list[str], everything: bool):
+    """(spec, robot or None, error or None) of each robot; one robot's bad input is an error."""
+    mjcf = {"body": args.body, "armature": not args.no_armature}
+    if len(specs) == 1 and not everything:  # one robot: bad input is one error line
+        robot = load_robot(specs[0], floating=args.floating, **mjcf)
+        return iter([(specs[0], robot, None)])
+    return load_each(specs, floating=args.floating, **mjcf)
+
+
+def _check_one(spec: str, robot, args: argparse.Namespace, alone: bool):
+    """The robot's CrossCheckResult, or its refusal row when others are compared too."""
+    try:
+        return crosscheck_robot(
+            robot, samples=args.samples, seed=args.seed, tolerance=args.tolerance, peer=args.peer
+        )
+    except GimwatchError as exc:
+        if alone:
+            raise
+        return _refusal_record(spec, str(exc))
+
+
+def _check_each(loaded, args, specs, everything, progress, results: list) -> None:
+    """Append each robot's result (or refusal row) to ``results``; skip failed loads of all."""
+    for spec, robot, error in loaded:
+        if progress is not None:
+            progress.start(spec)
+        if robot is not None:
+            results.append(_check_one(spec, robot, args, alone=len(specs) == 1))
+        elif everything:
+            reason = getattr(error, "problem", str(error))
+            print(f"crosscheck: skipped {spec}: {reason}", file=sys.stderr)
+        else:
+            results.append(_refusal_record(spec, str(error)))
+
+
+def _finish(progress: ItemProgress | None, results: list, args: argparse.Namespace) -> None:
+    """Close the progress bar, then print the results, if any."""
+    if progress is not None:
+        progress.close()
+    if results:
+        _print(results, args)
+
+
 def run(args: argparse.Namespace) -> int:
     """Cross-check each robot and print the worst errors."""
     check_tolerance(args.tolerance, "--tolerance")
     everything = "all" in args.robots
     specs = list(example_robot_names()) if everything else expand_specs(args.robots)
-    mjcf = {"body": args.body, "armature": not args.no_armature}
-    if len(specs) == 1 and not everything:  # one robot: bad input is one error line
-        robot = load_robot(specs[0], floating=args.floating, **mjcf)
-        loaded = iter([(specs[0], robot, None)])
-    else:
-        loaded = load_each(specs, floating=args.floating, **mjcf)
+    loaded = _loaded(args, specs, everything)
     results: list = []
     progress = ItemProgress("crosscheck", len(specs)) if len(specs) > 1 else None
     try:
-        for spec, robot, error in loaded:
-            if progress is not None:
-                progress.start(spec)
-            if robot is None:
-                if everything:
-                    reason = getattr(error, "problem", str(error))
-                    print(f"crosscheck: skipped {spec}: {reason}", file=sys.stderr)
-                else:
-                    results.append(_refusal_record(spec, str(error)))
-                continue
-            try:
-                results.append(
-                    crosscheck_robot(
-                        robot,
-                        samples=args.samples,
-                        seed=args.seed,
-                        tolerance=args.tolerance,
-                        peer=args.peer,
-                    )
-                )
-            except GimwatchError as exc:
-                if len(specs) == 1:
-                    raise
-                results.append(_refusal_record(spec, str(exc)))
-    except KeyboardInterrupt:
-        if progress is not None:
-            progress.close()
-        if results:
-            _print(results, args)
+        _check_each(loaded, args, specs, everything, progress, results)
+    except KeyboardInterrupt:  # an interrupted run still prints what it compared
+        _finish(progress, results, args)
         raise
-    if progress is not None:
-        progress.close()
-    if results:
-        _print(results, args)
+    _finish(progress, results, args)
     return _status(results)

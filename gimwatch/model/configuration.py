@@ -157,55 +157,68 @@ def user_configuration(
         GimwatchError: From ``error``: wrong length, unknown or multi-coordinate joint in a
             mapping, non-finite value, a (cos, sin) pair or quaternion far from unit norm.
     """
-    model = robot.model
-    neutral = pin.neutral(model)
-    joints = list(zip(model.joints[1:], model.names[1:], strict=True))
     if isinstance(values, Mapping):
-        q = np.array(neutral if default is None else default, dtype=float)
-        for name, value in values.items():
-            if not model.existJointName(name) or name == "universe":
-                names = [n for _, n in joints]
-                shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
-                raise error(f"{key}.{name}", f"unknown joint; {robot.name} has {shown}")
-            joint = model.joints[model.getJointId(name)]
-            kind = _kind(joint)
-            if kind not in ("one", "continuous"):
-                raise error(
-                    f"{key}.{name}",
-                    f"joint is a {kind} joint with {joint.nq} coordinates; give q as a list",
-                )
-            q[joint.idx_q : joint.idx_q + joint.nq] = _angle_block(kind, np.array([value]))
-        return q
+        return _from_mapping(robot, values, key, error, default)
     if isinstance(values, (list, tuple, np.ndarray)):
-        flat = np.asarray(values, dtype=float).ravel()
-        if not np.all(np.isfinite(flat)):
-            raise error(key, f"must be finite, got {flat.tolist()!r}")
-        size = user_size(robot)
-        if robot.mujoco_joints:  # MJCF: MuJoCo's qpos, quaternions (w, x, y, z)
-            if flat.size != model.nq:
-                raise error(key, f"must have {model.nq} values (MuJoCo's qpos), got {flat.size}")
-            return _check_units(robot, q_from_qpos(model, flat), key, error, mujoco=True)
-        if flat.size == model.nq:  # Pinocchio's own coordinates, unit blocks checked
-            return _check_units(robot, flat.copy(), key, error)
-        if flat.size != size:
-            what = f"q-coordinates of {robot.name}"
-            if size != model.nq:
-                what += (
-                    f", continuous joints by angle; or Pinocchio's {model.nq} with (cos θ, sin θ)"
-                )
-            raise error(key, f"must have {size} values ({what}), got {flat.size}")
-        q = np.empty(model.nq)
-        offset = 0
-        for joint, _name in joints:
-            width = _user_width(joint)
-            block = flat[offset : offset + width]
-            q[joint.idx_q : joint.idx_q + joint.nq] = _angle_block(_kind(joint), block)
-            offset += width
-        return _check_units(robot, q, key, error)
-    q = np.array(neutral, dtype=float)
+        return _from_sequence(robot, values, key, error)
+    q = np.array(pin.neutral(robot.model), dtype=float)
     x = float(values)
-    for joint, _name in joints:
+    for joint in robot.model.joints[1:]:
         kind = _kind(joint)
         if kind in ("one", "continuous"):
             q[joint.idx_q : joint.idx_q + joint.nq] = _angle_block(kind, np.array([x]))
     return q
+
+
+def _from_mapping(
+    robot: Robot,
+    values: Mapping,
+    key: str,
+    error: ErrorFactory,
+    default: np.ndarray | None,
+) -> np.ndarray:
+    """The q of ``{joint: value}``: one-coordinate joints only, the rest from ``default``."""
+    model = robot.model
+    q = np.array(pin.neutral(model) if default is None else default, dtype=float)
+    for name, value in values.items():
+        if not model.existJointName(name) or name == "universe":
+            names = list(model.names[1:])
+            shown = ", ".join(names[:6]) + (", ..." if len(names) > 6 else "")
+            raise error(f"{key}.{name}", f"unknown joint; {robot.name} has {shown}")
+        joint = model.joints[model.getJointId(name)]
+        kind = _kind(joint)
+        if kind not in ("one", "continuous"):
+            raise error(
+                f"{key}.{name}",
+                f"joint is a {kind} joint with {joint.nq} coordinates; give q as a list",
+            )
+        q[joint.idx_q : joint.idx_q + joint.nq] = _angle_block(kind, np.array([value]))
+    return q
+
+
+def _from_sequence(robot: Robot, values: Any, key: str, error: ErrorFactory) -> np.ndarray:
+    """The q of a list: MuJoCo's qpos (MJCF), Pinocchio's q, or a value per user coordinate."""
+    model = robot.model
+    flat = np.asarray(values, dtype=float).ravel()
+    if not np.all(np.isfinite(flat)):
+        raise error(key, f"must be finite, got {flat.tolist()!r}")
+    size = user_size(robot)
+    if robot.mujoco_joints:  # MJCF: MuJoCo's qpos, quaternions (w, x, y, z)
+        if flat.size != model.nq:
+            raise error(key, f"must have {model.nq} values (MuJoCo's qpos), got {flat.size}")
+        return _check_units(robot, q_from_qpos(model, flat), key, error, mujoco=True)
+    if flat.size == model.nq:  # Pinocchio's own coordinates, unit blocks checked
+        return _check_units(robot, flat.copy(), key, error)
+    if flat.size != size:
+        what = f"q-coordinates of {robot.name}"
+        if size != model.nq:
+            what += f", continuous joints by angle; or Pinocchio's {model.nq} with (cos θ, sin θ)"
+        raise error(key, f"must have {size} values ({what}), got {flat.size}")
+    q = np.empty(model.nq)
+    offset = 0
+    for joint in model.joints[1:]:
+        width = _user_width(joint)
+        block = flat[offset : offset + width]
+        q[joint.idx_q : joint.idx_q + joint.nq] = _angle_block(_kind(joint), block)
+        offset += width
+    return _check_units(robot, q, key, error)

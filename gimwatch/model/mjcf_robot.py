@@ -18,6 +18,7 @@
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -57,7 +58,6 @@ def check_mjcf_budget(path: str) -> None:
         URDFError: Too many bytes, bodies or levels, naming the file and the limit, or an
             include that is not a regular file (a FIFO, a device), refused before it is opened.
     """
-    folder = Path(path).parent
     limit, bodies, total = max_links(), 0, 0
     pending, seen = [Path(path)], set()
     while pending:
@@ -73,38 +73,54 @@ def check_mjcf_budget(path: str) -> None:
         if total > MAX_MJCF_BYTES:
             raise URDFError(path, f"is more than {MAX_MJCF_BYTES} bytes with its includes")
         text = current.read_text(encoding="utf-8", errors="replace")
-        depth, position = 0, text.find("<")
-        while position >= 0:
-            if text.startswith("<!--", position):
-                end = text.find("-->", position + 4)
-                position = -1 if end < 0 else text.find("<", end + 3)
-                continue
-            end = text.find(">", position)
-            if end < 0:
-                break
-            tag = text[position + 1 : end]
-            name = tag.split(None, 1)[0] if tag.strip() else ""
-            if name == "body":
-                bodies += 1
-                if bodies > limit:
-                    raise URDFError(
-                        path,
-                        f"has more than {limit} <body> elements, more than gimwatch reads "
-                        "(set $GIMWATCH_MAX_LINKS to read more)",
-                    )
-                if not tag.endswith("/"):
-                    depth += 1
-                    if depth > MAX_BODY_DEPTH:
-                        raise URDFError(
-                            path, f"nests <body> more than {MAX_BODY_DEPTH} levels deep"
-                        )
-            elif name == "/body":
-                depth -= 1
-            elif name == "include":
-                included = _attribute(tag, "file")
-                if included:
-                    pending.append(folder / included)
-            position = text.find("<", end + 1)
+        bodies = _count_bodies(path, text, bodies, limit, pending.append)
+
+
+def _tags(text: str) -> Iterator[str]:
+    """The text inside each ``<...>`` of ``text``, comments skipped; stops at an unclosed one."""
+    position = text.find("<")
+    while position >= 0:
+        if text.startswith("<!--", position):
+            end = text.find("-->", position + 4)
+            position = -1 if end < 0 else text.find("<", end + 3)
+            continue
+        end = text.find(">", position)
+        if end < 0:
+            return
+        yield text[position + 1 : end]
+        position = text.find("<", end + 1)
+
+
+def _count_bodies(
+    path: str, text: str, bodies: int, limit: int, include: Callable[[Path], None]
+) -> int:
+    """``bodies`` plus the ``<body>`` elements of one file, its depth checked; includes queued.
+
+    Raises:
+        URDFError: More than ``limit`` bodies or MAX_BODY_DEPTH levels, naming ``path``.
+    """
+    folder, depth = Path(path).parent, 0
+    for tag in _tags(text):
+        name = tag.split(None, 1)[0] if tag.strip() else ""
+        if name == "body":
+            bodies += 1
+            if bodies > limit:
+                raise URDFError(
+                    path,
+                    f"has more than {limit} <body> elements, more than gimwatch reads "
+                    "(set $GIMWATCH_MAX_LINKS to read more)",
+                )
+            if not tag.endswith("/"):
+                depth += 1
+                if depth > MAX_BODY_DEPTH:
+                    raise URDFError(path, f"nests <body> more than {MAX_BODY_DEPTH} levels deep")
+        elif name == "/body":
+            depth -= 1
+        elif name == "include":
+            included = _attribute(tag, "file")
+            if included:
+                include(folder / included)
+    return bodies
 
 
 def _ignored_dynamics(mj_model) -> str:

@@ -46,6 +46,7 @@ from __future__ import annotations
 import re
 import warnings
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 
 from gimwatch.errors import URDFError, URDFWarning
 
@@ -224,7 +225,7 @@ def _material_quirks(root: ET.Element) -> list[str]:
             for material in visual.findall("material"):
                 if material.get("name") is None:  # name="" urdfdom reads (Go2 has them)
                     visual.remove(material)
-                    unnamed.append(link.get("name"))
+                    unnamed.append(str(link.get("name")))
     seen, duplicates = set(), []
     for material in root.findall("material"):
         name = material.get("name")
@@ -245,58 +246,73 @@ def _material_quirks(root: ET.Element) -> list[str]:
     return fixes
 
 
-def _limit_quirks(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
-    negative, missing_value, missing_limit, reversed_range, empty_dynamics = [], [], [], [], []
+def _fix_effort_velocity(limit: ET.Element, name: str | None, found: dict[str, list]) -> None:
+    """A missing effort/velocity read as 0, a negative or unreadable one as unlimited (0)."""
+    for key in ("effort", "velocity"):
+        text = limit.get(key)
+        if text is None:
+            limit.set(key, "0")
+            found["missing_value"].append(f"{name}.{key}")
+            continue
+        try:
+            value = float(text)
+        except ValueError:
+            value = -1.0  # unreadable, as urdfdom would say: read as unlimited too
+        if not value >= 0:
+            limit.set(key, "0")
+            found["negative"].append(f"{name}.{key}={text}")
+
+
+def _fix_range(limit: ET.Element, name: str | None, found: dict[str, list]) -> None:
+    """Limits with lower > upper (or unreadable) read as unlimited."""
+    try:
+        lower = float(limit.get("lower", "0"))
+        upper = float(limit.get("upper", "0"))
+    except ValueError:  # e.g. lower="-1.57." (a typo urdfdom refuses)
+        lower, upper = 1.0, 0.0
+    if not lower <= upper:
+        limit.set("lower", "-" + _UNLIMITED)
+        limit.set("upper", _UNLIMITED)
+        found["reversed_range"].append(name)
+
+
+#: What each kind of limit quirk is read as, in the order the fixes are listed.
+_LIMIT_FIXES = {
+    "negative": "negative or unreadable effort/velocity limits read as unlimited",
+    "missing_value": "missing <limit> effort/velocity read as 0",
+    "missing_limit": "revolute/prismatic joints without <limit> read as unlimited",
+    "reversed_range": "limits with lower > upper (or unreadable) read as unlimited",
+    "empty_dynamics": "empty <dynamics/> removed",
+}
+
+
+def _limit_quirks(root: ET.Element, kinds: dict[str | None, str | None]) -> list[str]:
+    found: dict[str, list] = {key: [] for key in _LIMIT_FIXES}
     for joint in root.findall("joint"):
         name, kind = joint.get("name"), joint.get("type")
         limit = joint.find("limit")
         if limit is None and kind in ("revolute", "prismatic"):
             bounds = {"lower": "-" + _UNLIMITED, "upper": _UNLIMITED}
-            limit = ET.SubElement(joint, "limit", effort="0", velocity="0", **bounds)
-            missing_limit.append(name)
+            limit = ET.SubElement(joint, "limit", {"effort": "0", "velocity": "0", **bounds})
+            found["missing_limit"].append(name)
         if limit is not None:
-            for key in ("effort", "velocity"):
-                text = limit.get(key)
-                if text is None:
-                    limit.set(key, "0")
-                    missing_value.append(f"{name}.{key}")
-                    continue
-                try:
-                    value = float(text)
-                except ValueError:
-                    value = -1.0  # unreadable, as urdfdom would say: read as unlimited too
-                if not value >= 0:
-                    limit.set(key, "0")
-                    negative.append(f"{name}.{key}={text}")
+            _fix_effort_velocity(limit, name, found)
             if kind in ("revolute", "prismatic"):
-                try:
-                    lower = float(limit.get("lower", "0"))
-                    upper = float(limit.get("upper", "0"))
-                except ValueError:  # e.g. lower="-1.57." (a typo urdfdom refuses)
-                    lower, upper = 1.0, 0.0
-                if not lower <= upper:
-                    limit.set("lower", "-" + _UNLIMITED)
-                    limit.set("upper", _UNLIMITED)
-                    reversed_range.append(name)
+                _fix_range(limit, name, found)
         dynamics = joint.find("dynamics")
         if dynamics is not None and dynamics.get("damping") is dynamics.get("friction") is None:
             joint.remove(dynamics)
-            empty_dynamics.append(name)
+            found["empty_dynamics"].append(name)
     fixes = []
-    for joints, what in (
-        (negative, "negative or unreadable effort/velocity limits read as unlimited"),
-        (missing_value, "missing <limit> effort/velocity read as 0"),
-        (missing_limit, "revolute/prismatic joints without <limit> read as unlimited"),
-        (reversed_range, "limits with lower > upper (or unreadable) read as unlimited"),
-        (empty_dynamics, "empty <dynamics/> removed"),
-    ):
+    for key, what in _LIMIT_FIXES.items():
+        joints = found[key]
         if joints:
             more = ", ..." if len(joints) > 3 else ""
             fixes.append(f"{what} ({', '.join(joints[:3])}{more})")
     return fixes
 
 
-def _mimics_of_fixed(root: ET.Element, kinds: dict[str, str | None]) -> list[str]:
+def _mimics_of_fixed(root: ET.Element, kinds: dict[str | None, str | None]) -> list[str]:
     followers = [
         f"{joint.get('name')} -> {mimic.get('joint')}"
         for joint in root.findall("joint")
@@ -316,7 +332,7 @@ def _implicit_world(root: ET.Element) -> list[str]:
     if any(link.get("name") == "world" for link in root.findall("link")):
         return []
     joints = [
-        joint.get("name")
+        str(joint.get("name"))
         for joint in root.findall("joint")
         if (parent := joint.find("parent")) is not None and parent.get("link") == "world"
     ]
@@ -327,7 +343,7 @@ def _implicit_world(root: ET.Element) -> list[str]:
     return [f"the undeclared parent link 'world' of {shown} added as the fixed base (massless)"]
 
 
-def fix_tree_quirks(root: ET.Element, source: str, padded: list[str] = ()) -> list[str]:
+def fix_tree_quirks(root: ET.Element, source: str, padded: Sequence[str] = ()) -> list[str]:
     """Normalise, in place, what urdfdom would refuse but M does not depend on.
 
     ``padded``: the attributes `padded_number_attributes` found in the text.

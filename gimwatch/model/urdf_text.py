@@ -202,6 +202,25 @@ def check_urdf_text(
     """
     root, fixes, padded = _parse(xml, source)
     fixes += fix_tree_quirks(root, source, padded)
+    links = _link_names(root, source)
+    base, children = _tree(links, _parent_of(root, source, set(links)), source)
+    welded = set() if floating else _welded_to_root(root, base, children)
+    fixes += _drop_invalid_welded_inertials(root, welded, source)
+    doubtful = [
+        str(link.get("name"))  # every link is named by now (_link_names)
+        for link in root.findall("link")
+        if not check_link_values(link, source) and link.get("name") not in welded
+    ]
+    for joint in root.findall("joint"):
+        check_joint_values(joint, source)
+    _check_mimics(root, source)
+    warn_quirks(source, fixes, stacklevel=stacklevel + 1)
+    warn_doubtful_inertias(source, doubtful, kind="link", stacklevel=stacklevel + 1)
+    return root, (ET.tostring(root, encoding="unicode") if fixes else xml)
+
+
+def _link_names(root: ET.Element, source: str) -> list[str]:
+    """The names of the links, in file order: at least one, each named, none twice."""
     links = [link.get("name") for link in root.findall("link")]
     if not links:
         raise URDFError(source, "the robot has no <link>")
@@ -212,6 +231,25 @@ def check_urdf_text(
         if name in seen:
             raise URDFError(source, "duplicate link name", element=f"link {name!r}")
         seen.add(name)
+    return [name for name in links if name]
+
+
+def _joint_ends(joint: ET.Element, where: str, seen: set[str], source: str) -> dict[str, str]:
+    """The parent and child links of one joint, each declared."""
+    ends = {}
+    for end in ("parent", "child"):
+        tag = joint.find(end)
+        link = tag.get("link") if tag is not None else None
+        if not link:
+            raise URDFError(source, f"missing <{end} link=...>", element=where)
+        if link not in seen:
+            raise URDFError(source, f"{end} link {link!r} is not defined", element=where)
+        ends[end] = link
+    return ends
+
+
+def _parent_of(root: ET.Element, source: str, seen: set[str]) -> dict[str, str]:
+    """Each child link's parent link: joints named once, one parent joint per link."""
     parent_of: dict[str, str] = {}
     joint_names: set[str] = set()
     for joint in root.findall("joint"):
@@ -222,18 +260,17 @@ def check_urdf_text(
         if name in joint_names:
             raise URDFError(source, "duplicate joint name", element=where)
         joint_names.add(name)
-        ends = {}
-        for end in ("parent", "child"):
-            tag = joint.find(end)
-            link = tag.get("link") if tag is not None else None
-            if not link:
-                raise URDFError(source, f"missing <{end} link=...>", element=where)
-            if link not in seen:
-                raise URDFError(source, f"{end} link {link!r} is not defined", element=where)
-            ends[end] = link
+        ends = _joint_ends(joint, where, seen, source)
         if ends["child"] in parent_of:
             raise URDFError(source, f"link {ends['child']!r} has two parent joints", element=where)
         parent_of[ends["child"]] = ends["parent"]
+    return parent_of
+
+
+def _tree(
+    links: list[str], parent_of: dict[str, str], source: str
+) -> tuple[str, dict[str, list[str]]]:
+    """The root link and each link's children: one root, every link reached from it."""
     roots = [name for name in links if name not in parent_of]
     if len(roots) != 1:
         problem = (
@@ -247,23 +284,11 @@ def check_urdf_text(
         children.setdefault(parent, []).append(child)
     reached = _reachable(roots[0], children)
     if len(reached) != len(links):
-        stray = sorted(seen - reached)[:4]
+        stray = sorted(set(links) - reached)[:4]
         raise URDFError(
             source, f"the links form a cycle not attached to the root: {', '.join(stray)}"
         )
-    welded = set() if floating else _welded_to_root(root, roots[0], children)
-    fixes += _drop_invalid_welded_inertials(root, welded, source)
-    doubtful = [
-        link.get("name")
-        for link in root.findall("link")
-        if not check_link_values(link, source) and link.get("name") not in welded
-    ]
-    for joint in root.findall("joint"):
-        check_joint_values(joint, source)
-    _check_mimics(root, source)
-    warn_quirks(source, fixes, stacklevel=stacklevel + 1)
-    warn_doubtful_inertias(source, doubtful, kind="link", stacklevel=stacklevel + 1)
-    return root, (ET.tostring(root, encoding="unicode") if fixes else xml)
+    return roots[0], children
 
 
 def _check_mimics(root: ET.Element, source: str) -> None:
@@ -274,7 +299,7 @@ def _check_mimics(root: ET.Element, source: str) -> None:
     freely.
     """
     kinds = {joint.get("name"): joint.get("type") for joint in root.findall("joint")}
-    follows: dict[str, str] = {}
+    follows: dict[str | None, str | None] = {}
     ghosts = []
     for joint in root.findall("joint"):
         mimic = joint.find("mimic")
@@ -290,12 +315,12 @@ def _check_mimics(root: ET.Element, source: str) -> None:
         if kinds[target] != "fixed":  # a mimic of a fixed joint is a quirk (urdf_quirks)
             follows[name] = target
     for start in follows:
-        path, joint = [start], follows[start]
-        while joint in follows and joint not in path:
-            path.append(joint)
-            joint = follows[joint]
-        if joint == start:
-            cycle = " -> ".join([*path, start])
+        path, followed = [start], follows[start]
+        while followed in follows and followed not in path:
+            path.append(followed)
+            followed = follows[followed]
+        if followed == start:
+            cycle = " -> ".join(str(name) for name in [*path, start])
             raise URDFError(
                 source, f"<mimic> joints form a cycle ({cycle})", element=f"joint {start!r}"
             )
@@ -313,9 +338,9 @@ def _check_mimics(root: ET.Element, source: str) -> None:
 def _welded_to_root(root: ET.Element, top: str, children: dict[str, list[str]]) -> set[str]:
     """The root link and the links joined to it by fixed joints only (fixed base)."""
     fixed = {
-        joint.find("child").get("link")
+        child.get("link")
         for joint in root.findall("joint")
-        if joint.get("type") == "fixed"
+        if joint.get("type") == "fixed" and (child := joint.find("child")) is not None
     }
     found, stack = set(), [top]
     while stack:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TypedDict, Unpack
 
 import numpy as np
 import numpy.typing as npt
@@ -164,7 +165,8 @@ def held_systems(
     if mj_model is not None:
         model.gravity.linear = np.array(mj_model.opt.gravity)
     data = model.createData()
-    systems, servos = [], None
+    systems: list[LinearSystem] = []
+    servos: Servos | None = None
     for q in qs:
         if use_gains:
             servos = gain_servos(robot, 0.0 if kp is None else kp, kd)
@@ -183,7 +185,18 @@ def held_systems(
             ctrl = held_controls(mj_model, q)
             servos = mjcf_servos(robot, mj_model, ctrl)
         systems.append(linearise(model, servos, q, gravity=gravity, data=data, source=robot.source))
+    if servos is None:  # an empty (0, nq) array of configurations
+        raise InputError("configurations", "at least one configuration", "none")
     return qs, systems, servos
+
+
+class HeldOptions(TypedDict, total=False):
+    """How the robot is held: the keyword options of `held_systems`, passed on by `stability`."""
+
+    kp: float | Sequence[float] | None
+    kd: float | Sequence[float] | None
+    gravity: bool
+    keyframe: str | None
 
 
 def stability(
@@ -192,10 +205,7 @@ def stability(
     *,
     integrators: Sequence[str] | None = None,
     timestep_s: float | None = None,
-    gravity: bool = True,
-    kp: float | Sequence[float] | None = None,
-    kd: float | Sequence[float] | None = None,
-    keyframe: str | None = None,
+    **held: Unpack[HeldOptions],
 ) -> list[StabilityRecord]:
     """h*, the verdict at the timestep and the critical mode, per configuration and integrator.
 
@@ -205,10 +215,11 @@ def stability(
         integrators: Names from `gimwatch.stability.step_maps.INTEGRATORS`; default: the
             model's own (``Euler`` without one).
         timestep_s: The timestep judged; default: the model's (2 ms without one).
-        gravity: Include gravity's stiffness ∂g/∂q.
-        kp: Servo stiffness (one number or one per coordinate) instead of the file's actuators.
-        kd: Servo damping, explicit (one number or one per coordinate).
-        keyframe: An MJCF keyframe's name to hold.
+        **held: How the robot is held, as in `held_systems`: ``gravity`` (default True:
+            include gravity's stiffness ∂g/∂q), ``kp`` (servo stiffness, one number or one
+            per coordinate, instead of the file's actuators), ``kd`` (servo damping,
+            explicit, one number or one per coordinate), ``keyframe`` (an MJCF keyframe's
+            name to hold).
 
     Raises:
         InputError: An unknown integrator or keyframe, a timestep ≤ 0, no servos, bad gains.
@@ -220,9 +231,7 @@ def stability(
     names = list(integrators) if integrators else []
     for name in names:
         check_integrator(name)
-    qs, systems, servos = held_systems(
-        robot, configurations, kp=kp, kd=kd, gravity=gravity, keyframe=keyframe
-    )
+    qs, systems, servos = held_systems(robot, configurations, **held)
     names = names or [servos.integrator or "Euler"]
     h = timestep_s if timestep_s is not None else servos.timestep_s or DEFAULT_TIMESTEP_S
     records = []

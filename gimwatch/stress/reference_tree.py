@@ -292,71 +292,80 @@ class TreeReference:
             self._check(n, x, s)
             for n, x, s in (("q", q, self.nq), ("v", v, self.nv), ("tau", tau, self.nv))
         )
-        tree = self.tree
-        n = tree.size
         with mpmath.workdps(self.dps):
             X, S = self._joints(q)
             twist, bias, _ = self._velocities(X, S, v)
-            IA: list[Any] = [None] * n
-            pA: list[Any] = [None] * n
-            for i in range(n):
-                IA[i] = [row[:] for row in self._inertia[i]]
-                pA[i] = _cross_force(twist[i], _apply(self._inertia[i], twist[i]))
-            U: list[Any] = [None] * n
-            Dinv: list[Any] = [None] * n
-            u: list[Any] = [None] * n
-            for i in range(n - 1, -1, -1):
-                if S[i] is None:
-                    continue
-                k, width = self.v_index[i], len(S[i][0])
-                Ui = _matmul(IA[i], S[i])  # 6 × width
-                D = _matmul(_transpose(S[i]), Ui)
-                if any(D[b][b] <= 0 for b in range(width)):
-                    raise InputError("M(q)", "positive definite (a joint moves no mass)", i)
-                Dinv[i] = mpmath.inverse(mpmath.matrix(D)).tolist()
-                St_p = [mpmath.fsum(S[i][r][b] * pA[i][r] for r in range(6)) for b in range(width)]
-                u[i] = [mpmath.mpf(float(tau[k + b])) - St_p[b] for b in range(width)]
-                U[i] = Ui
-                if i == 0:
-                    continue
-                UDinv = _matmul(Ui, Dinv[i])
-                Ia = [
-                    [
-                        IA[i][r][c] - mpmath.fsum(UDinv[r][b] * Ui[c][b] for b in range(width))
-                        for c in range(6)
-                    ]
-                    for r in range(6)
+            U, Dinv, u = self._articulated_pass(X, S, twist, bias, tau)
+            return self._accelerations(X, S, bias, (U, Dinv, u))
+
+    def _articulated_pass(self, X: list, S: list, twist: list, bias: list, tau) -> tuple:
+        """Tip to root: each joint's U = IA·S, D⁻¹ = (SᵀU)⁻¹ and u = τ − Sᵀp (Table 7.1).
+
+        Raises:
+            InputError: A joint's D is not positive definite (it moves no mass).
+        """
+        tree = self.tree
+        n = tree.size
+        IA: list[Any] = [None] * n
+        pA: list[Any] = [None] * n
+        for i in range(n):
+            IA[i] = [row[:] for row in self._inertia[i]]
+            pA[i] = _cross_force(twist[i], _apply(self._inertia[i], twist[i]))
+        U: list[Any] = [None] * n
+        Dinv: list[Any] = [None] * n
+        u: list[Any] = [None] * n
+        for i in range(n - 1, -1, -1):
+            if S[i] is None:
+                continue
+            k, width = self.v_index[i], len(S[i][0])
+            Ui = _matmul(IA[i], S[i])  # 6 × width
+            D = _matmul(_transpose(S[i]), Ui)
+            if any(D[b][b] <= 0 for b in range(width)):
+                raise InputError("M(q)", "positive definite (a joint moves no mass)", i)
+            Dinv[i] = mpmath.inverse(mpmath.matrix(D)).tolist()
+            St_p = [mpmath.fsum(S[i][r][b] * pA[i][r] for r in range(6)) for b in range(width)]
+            u[i] = [mpmath.mpf(float(tau[k + b])) - St_p[b] for b in range(width)]
+            U[i] = Ui
+            if i == 0:
+                continue
+            UDinv = _matmul(Ui, Dinv[i])
+            Ia = [
+                [
+                    IA[i][r][c] - mpmath.fsum(UDinv[r][b] * Ui[c][b] for b in range(width))
+                    for c in range(6)
                 ]
-                Ia_c = _apply(Ia, bias[i])
-                UDu = [mpmath.fsum(UDinv[r][b] * u[i][b] for b in range(width)) for r in range(6)]
-                pa = [pA[i][r] + Ia_c[r] + UDu[r] for r in range(6)]
-                p = tree.parent[i]
-                XT_Ia = _matmul(_transpose(X[i]), Ia)
-                add = _matmul(XT_Ia, X[i])
-                IA[p] = [[IA[p][r][c] + add[r][c] for c in range(6)] for r in range(6)]
-                back = _apply_t(X[i], pa)
-                pA[p] = [x + y for x, y in zip(pA[p], back, strict=True)]
-            qdd = [mpmath.mpf(0)] * self.nv
-            acc: list[Any] = [None] * n
-            for i in range(n):
-                if S[i] is None:
-                    acc[i] = self._base_acceleration()
-                    continue
-                k, width = self.v_index[i], len(S[i][0])
-                ai = [
-                    x + y for x, y in zip(self._frame_acceleration(i, X, acc), bias[i], strict=True)
-                ]
-                Ut_a = [mpmath.fsum(U[i][r][b] * ai[r] for r in range(6)) for b in range(width)]
-                rhs = [u[i][b] - Ut_a[b] for b in range(width)]
-                dd = [
-                    mpmath.fsum(Dinv[i][b][c] * rhs[c] for c in range(width)) for b in range(width)
-                ]
-                for b in range(width):
-                    qdd[k + b] = dd[b]
-                acc[i] = [
-                    ai[r] + mpmath.fsum(S[i][r][b] * dd[b] for b in range(width)) for r in range(6)
-                ]
-            return qdd
+                for r in range(6)
+            ]
+            Ia_c = _apply(Ia, bias[i])
+            UDu = [mpmath.fsum(UDinv[r][b] * u[i][b] for b in range(width)) for r in range(6)]
+            pa = [pA[i][r] + Ia_c[r] + UDu[r] for r in range(6)]
+            p = tree.parent[i]
+            add = _matmul(_matmul(_transpose(X[i]), Ia), X[i])
+            IA[p] = [[IA[p][r][c] + add[r][c] for c in range(6)] for r in range(6)]
+            back = _apply_t(X[i], pa)
+            pA[p] = [x + y for x, y in zip(pA[p], back, strict=True)]
+        return U, Dinv, u
+
+    def _accelerations(self, X: list, S: list, bias: list, factors: tuple) -> list:
+        """Root to tip: q̈ of each joint from its U, D⁻¹ and u, and the body accelerations."""
+        U, Dinv, u = factors
+        qdd = [mpmath.mpf(0)] * self.nv
+        acc: list[Any] = [None] * self.tree.size
+        for i in range(self.tree.size):
+            if S[i] is None:
+                acc[i] = self._base_acceleration()
+                continue
+            k, width = self.v_index[i], len(S[i][0])
+            ai = [x + y for x, y in zip(self._frame_acceleration(i, X, acc), bias[i], strict=True)]
+            Ut_a = [mpmath.fsum(U[i][r][b] * ai[r] for r in range(6)) for b in range(width)]
+            rhs = [u[i][b] - Ut_a[b] for b in range(width)]
+            dd = [mpmath.fsum(Dinv[i][b][c] * rhs[c] for c in range(width)) for b in range(width)]
+            for b in range(width):
+                qdd[k + b] = dd[b]
+            acc[i] = [
+                ai[r] + mpmath.fsum(S[i][r][b] * dd[b] for b in range(width)) for r in range(6)
+            ]
+        return qdd
 
     def forward_dynamics(
         self, q: npt.ArrayLike, v: npt.ArrayLike, tau: npt.ArrayLike

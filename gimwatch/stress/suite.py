@@ -36,9 +36,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.linalg
 
-from gimwatch.crosscheck import denoc_model
 from gimwatch.errors import InputError
 from gimwatch.metrics import conditioning
+from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 from gimwatch.stress.cases import CASES, StressCase
@@ -175,6 +175,71 @@ def _estimators_finite(M: np.ndarray) -> bool:
     return bool(np.all(np.isfinite(list(values.values()))))
 
 
+def _gim_against_reference(
+    case: StressCase,
+    q: np.ndarray,
+    M_denoc: np.ndarray,
+    crba_gim: Callable | None,
+    notes: list[str],
+) -> tuple[np.ndarray, float | None, str]:
+    """M to judge (crba's, else DeNOC's), DeNOC's GIM error, and what it was measured against.
+
+    The error is against crba (``crba_gim``, None beyond Pinocchio's Data), or else against
+    the planar closed form (mpmath); None (and "") when there is neither.
+    """
+    nv = len(M_denoc)
+    if crba_gim is not None:
+        M = crba_gim(q)
+        M_ref: np.ndarray | None = M
+        gim_reference = "crba"
+    else:
+        notes.append(f"nv = {nv} > {DATA_NV_LIMIT}: no Pinocchio Data (GBs), aba/crba not run")
+        M = M_denoc
+        planar = _planar(case)
+        gim_reference = "planar closed form (mpmath)" if planar is not None else ""
+        M_ref = None if planar is None else np.array(planar.gim(q).tolist(), dtype=float)
+    gim_error = (
+        None if M_ref is None else float(np.linalg.norm(M_denoc - M_ref) / np.linalg.norm(M_ref))
+    )
+    return M, gim_error, gim_reference
+
+
+def _cholesky_ok(M: np.ndarray, notes: list[str]) -> bool:
+    """Whether M is numerically positive definite (its Cholesky factor exists)."""
+    try:
+        scipy.linalg.cholesky(M, lower=True)
+    except np.linalg.LinAlgError:
+        notes.append("Cholesky of M failed: M is not numerically positive definite")
+        return False
+    return True
+
+
+def _qdd_errors(
+    methods: dict[str, Callable | None], q: np.ndarray, v: np.ndarray, tau: np.ndarray, exact
+) -> dict[str, float | None]:
+    """Each method's ‖q̈ − q̈_exact‖ / ‖q̈_exact‖; None for a method not run."""
+    errors: dict[str, float | None] = {}
+    for name, method in methods.items():
+        if method is None:
+            errors[name] = None
+            continue
+        a = np.asarray(method(q, v, tau), dtype=float)
+        errors[name] = float(np.linalg.norm(a - exact) / np.linalg.norm(exact))
+    return errors
+
+
+def _simulated(
+    case: StressCase, robot: Robot, q: np.ndarray, simulate: bool, notes: list[str]
+) -> tuple[bool, str, float | None]:
+    """(simulated, status, energy drift): the case simulated when asked and allowed."""
+    if simulate and case.no_simulation:
+        notes.append(f"not simulated: {case.no_simulation}")
+        return False, "", None
+    if not simulate:
+        return False, "", None
+    return (True, *simulate_case(case, robot, q))
+
+
 def run_case(case: StressCase, *, seed: int = 0, simulate: bool = False) -> StressResult:
     """Run every check of the suite on ``case`` (see the module docstring)."""
     robot, q = case.build()
@@ -185,48 +250,20 @@ def run_case(case: StressCase, *, seed: int = 0, simulate: bool = False) -> Stre
     g = tuple(case.gravity_m_s2)
     methods: dict[str, Callable | None] = dict.fromkeys(METHODS)
     methods["denoc"] = lambda q, v, tau: dm.forward_dynamics(q, v, tau, gravity=g)
-    notes = []
+    notes: list[str] = []
     ref_name, reference = _reference(case, robot)
     M_denoc = dm.gim(q)
+    crba_gim = None
     if nv <= DATA_NV_LIMIT:
         pin_methods, crba_gim = _pinocchio_methods(robot, g)
         methods.update(pin_methods)
-        M = crba_gim(q)
-        gim_reference = "crba"
-        M_ref = M
-    else:
-        notes.append(f"nv = {nv} > {DATA_NV_LIMIT}: no Pinocchio Data (GBs), aba/crba not run")
-        M = M_denoc
-        planar = _planar(case)
-        gim_reference = "planar closed form (mpmath)" if planar is not None else ""
-        M_ref = None if planar is None else np.array(planar.gim(q).tolist(), dtype=float)
-    gim_error = (
-        None if M_ref is None else float(np.linalg.norm(M_denoc - M_ref) / np.linalg.norm(M_ref))
-    )
-    try:
-        scipy.linalg.cholesky(M, lower=True)
-        cholesky_ok = True
-    except np.linalg.LinAlgError:
-        cholesky_ok = False
-        notes.append("Cholesky of M failed: M is not numerically positive definite")
+    M, gim_error, gim_reference = _gim_against_reference(case, q, M_denoc, crba_gim, notes)
+    cholesky_ok = _cholesky_ok(M, notes)
     kappa = conditioning.condition_number(M) if cholesky_ok else math.inf
-    delta = conditioning.diagonal_ratio(M)
     estimators_ok = cholesky_ok and _estimators_finite(M)
-    exact = reference(q, v, tau)
-    errors: dict[str, float | None] = {}
-    for name, method in methods.items():
-        if method is None:
-            errors[name] = None
-            continue
-        a = np.asarray(method(q, v, tau), dtype=float)
-        errors[name] = float(np.linalg.norm(a - exact) / np.linalg.norm(exact))
+    errors = _qdd_errors(methods, q, v, tau, reference(q, v, tau))
     bound = error_constant(nv) * kappa * EPS
-    sim_status, drift = "", None
-    if simulate and case.no_simulation:
-        notes.append(f"not simulated: {case.no_simulation}")
-        simulate = False
-    if simulate:
-        sim_status, drift = simulate_case(case, robot, q)
+    simulate, sim_status, drift = _simulated(case, robot, q, simulate, notes)
     within = all(
         e is not None and np.isfinite(e) and e <= bound for e in errors.values() if e is not None
     )
@@ -252,7 +289,7 @@ def run_case(case: StressCase, *, seed: int = 0, simulate: bool = False) -> Stre
         family=case.family,
         nv=nv,
         kappa=float(kappa),
-        delta=float(delta),
+        delta=float(conditioning.diagonal_ratio(M)),
         cholesky_ok=cholesky_ok,
         gim_error=gim_error,
         gim_reference=gim_reference,

@@ -162,6 +162,30 @@ def _trajectory_section(result: SurveyResult) -> list[str]:
 
 def markdown_report(result: SurveyResult, wall_time_s: float | None) -> str:
     """The survey's report.md: settings, per-robot tables, worst samples, runs, failures."""
+    lines = _header(result, wall_time_s)
+    lines += [_summary(result), "## κ, δ and αδ", "", readme_table(result)]
+    lines += _pivot_section(result)
+    lines += _extremes_section(result)
+    lines += _worst_section(result)
+    lines += _placeholder_section(result)
+    lines += _trajectory_section(result)
+    if result.failures:
+        lines += ["", "## Robots not surveyed", "", "| robot | stage | reason |", "|---|---|---|"]
+        lines += [f"| {f.spec} | {f.stage} | {f.reason} |" for f in result.failures]
+    lines += [
+        "",
+        "## Plots",
+        "",
+        f"![κ vs δ, all robots]({SCATTER_PNG})",
+        "",
+        f"![κ vs δ per robot]({GRID_PNG})",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def _header(result: SurveyResult, wall_time_s: float | None) -> list[str]:
+    """Title, date, libraries, CPU and settings; the robots not reached if interrupted."""
     libraries = ", ".join(f"{k} {v}" for k, v in versions().items())
     wall = "" if wall_time_s is None else f", wall time {wall_time_s:.1f} s"
     lines = [
@@ -177,8 +201,12 @@ def markdown_report(result: SurveyResult, wall_time_s: float | None) -> str:
     if result.interrupted:
         reached = ", ".join(result.not_reached) or "none"
         lines += [f"**Interrupted**: partial results; robots not reached: {reached}.", ""]
-    lines += [_summary(result), "## κ, δ and αδ", "", readme_table(result)]
-    lines += [
+    return lines
+
+
+def _pivot_section(result: SurveyResult) -> list[str]:
+    """The legend of the κ table, then the pivot ratios per robot."""
+    lines = [
         "`*`: no joint with a fixed base, surveyed with a free-flyer base. With a floating "
         "base the GIM mixes kg (translations) and kg·m² (rotations): κ and δ depend on units. "
         "`—`: undefined, κ or δ is the same at every sample."
@@ -200,7 +228,12 @@ def markdown_report(result: SurveyResult, wall_time_s: float | None) -> str:
             f"| {r.name} | {_g(k['p05'])} | {_g(k['p95'])} | {_g(d['p05'])} | {_g(d['p95'])} "
             f"| {_g(f['median'])} / {_g(f['max'])} | {_g(b['median'])} / {_g(b['max'])} |"
         )
-    lines += [
+    return lines
+
+
+def _extremes_section(result: SurveyResult) -> list[str]:
+    """The coordinates that most often hold the extremes of the diagonal and the spectrum."""
+    lines = [
         "",
         "## What makes each robot ill-conditioned",
         "",
@@ -216,7 +249,12 @@ def markdown_report(result: SurveyResult, wall_time_s: float | None) -> str:
     for r in result.robots:
         cells = [f"{d} ({f:.0%})" for d, f in (r.extreme_dofs[k] for k in _EXTREME_COLUMNS)]
         lines.append(f"| {r.name} | {' | '.join(cells)} | {r.lambda_min_on_min_diagonal:.0%} |")
-    lines += [
+    return lines
+
+
+def _worst_section(result: SurveyResult) -> list[str]:
+    """The samples with the largest κ, per robot."""
+    lines = [
         "",
         "## Worst configurations",
         "",
@@ -229,28 +267,20 @@ def markdown_report(result: SurveyResult, wall_time_s: float | None) -> str:
         for w in r.worst:
             kappa, delta = _g(w.kappa, 4), _g(w.diagonal_ratio, 4)
             lines.append(f"| {r.name} | {w.sample} | {kappa} | {delta} |")
+    return lines
+
+
+def _placeholder_section(result: SurveyResult) -> list[str]:
+    """The joints whose placeholder limits were sampled in ±π rad / ±1 m, if any."""
     placeholders = [r for r in result.robots if r.placeholder_limits]
-    if placeholders:
-        lines += [
-            "",
-            "## Placeholder joint limits",
-            "",
-            'Limits of |limit| >= 1e3 (or none) stand for "unlimited"; the random samples draw '
-            "those coordinates in ±π rad (angles) or ±1 m (translations) instead.",
-            "",
-        ]
-        lines += [f"- {r.name}: {', '.join(r.placeholder_limits)}" for r in placeholders]
-    lines += _trajectory_section(result)
-    if result.failures:
-        lines += ["", "## Robots not surveyed", "", "| robot | stage | reason |", "|---|---|---|"]
-        lines += [f"| {f.spec} | {f.stage} | {f.reason} |" for f in result.failures]
-    lines += [
+    if not placeholders:
+        return []
+    lines = [
         "",
-        "## Plots",
+        "## Placeholder joint limits",
         "",
-        f"![κ vs δ, all robots]({SCATTER_PNG})",
-        "",
-        f"![κ vs δ per robot]({GRID_PNG})",
+        'Limits of |limit| >= 1e3 (or none) stand for "unlimited"; the random samples draw '
+        "those coordinates in ±π rad (angles) or ±1 m (translations) instead.",
         "",
     ]
-    return "\n".join(lines)
+    return lines + [f"- {r.name}: {', '.join(r.placeholder_limits)}" for r in placeholders]

@@ -27,7 +27,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypedDict, Unpack
 
 import numpy as np
 
@@ -46,7 +46,7 @@ from gimwatch.model.robots import (
 )
 from gimwatch.model.robots import random_configurations as _random_configurations
 from gimwatch.survey.records import RobotFailure, RobotSurvey, SurveyResult, WorstConfiguration
-from gimwatch.survey.sweep import Task, run_sweep
+from gimwatch.survey.sweep import SweepOutcome, Task, run_sweep
 from gimwatch.survey.trajectory import (
     TrajectorySettings,
     TrajectoryStatistics,
@@ -60,6 +60,7 @@ __all__ = [
     "RobotFailure",
     "RobotSurvey",
     "SurveyResult",
+    "SweepOptions",
     "WorstConfiguration",
     "run_survey",
     "sample_metrics",
@@ -214,7 +215,7 @@ def _summarize(robot: Robot, note: str, index: np.ndarray, metrics, qs) -> Robot
     )
 
 
-def _load(spec: str, floating: bool) -> tuple[Robot, str]:
+def _load(spec: str, floating: bool | None) -> tuple[Robot, str]:
     try:
         return load_robot(spec, floating=floating), ""
     except RobotError as exc:
@@ -232,17 +233,23 @@ def _worker_spec(spec: str) -> str:
     return spec
 
 
+class SweepOptions(TypedDict, total=False):
+    """How a survey's chunks run: the keyword options `run_survey` passes to its sweep."""
+
+    chunk_size: int
+    workers: int | None
+    scheduler: str | None
+    progress: Callable[[int, int], None] | None
+
+
 def run_survey(
     specs: Sequence[str],
     *,
     samples: int = 200,
     seed: int = 0,
     floating: bool | None = None,
-    chunk_size: int = 50,
-    workers: int | None = None,
-    scheduler: str | None = None,
-    progress: Callable[[int, int], None] | None = None,
     trajectories: TrajectorySettings | None = None,
+    **sweep: Unpack[SweepOptions],
 ) -> SurveyResult:
     """Survey robots at the neutral configuration plus ``samples`` random ones each.
 
@@ -259,20 +266,61 @@ def run_survey(
             default) each robot its own (`default_floating`: example-robot-data's base,
             a free-flyer for legged robots and humanoids). A robot with no joint on a fixed base
             (a drone) gets a free-flyer anyway and says so in ``note``.
-        chunk_size: Samples per task.
-        workers: Local processes; 1 runs in this process. Default: this process for small
-            surveys (estimated under a few seconds), else every core.
-        scheduler: ``"local"`` or a Dask scheduler address to run the chunks on Dask.
-        progress: Called as ``progress(finished_chunks, total_chunks)`` after each chunk.
         trajectories: Also simulate short runs from random samples 1..count of each robot
             (`gimwatch.survey.trajectory`); each run is one more task of the sweep.
+        **sweep: How the chunks run (`SweepOptions`): ``chunk_size`` (samples per task,
+            default 50); ``workers`` (local processes; 1 runs in this process; default: this
+            process for small surveys, estimated under a few seconds, else every core);
+            ``scheduler`` (``"local"`` or a Dask scheduler address to run the chunks on
+            Dask); ``progress`` (called as ``progress(finished_chunks, total_chunks)`` after
+            each chunk).
     """
+    chunk_size = sweep.get("chunk_size", 50)
     for name, value in (("samples", samples), ("chunk_size", chunk_size)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise InputError(name, "a positive integer", value)
     failures: list[RobotFailure] = []
-    loaded: list[tuple[Robot, str, np.ndarray]] = []
-    for spec in survey_robot_specs(specs):
+    loaded = _load_robots(survey_robot_specs(specs), floating, samples, seed, failures)
+    runs_wanted = 0 if trajectories is None else min(trajectories.count, samples)
+    tasks, owners = _survey_tasks(loaded, chunk_size, runs_wanted, trajectories)
+    finished = 0
+    progress = sweep.get("progress")
+
+    def chunk_done(_: int) -> None:
+        nonlocal finished
+        finished += 1
+        if progress is not None:
+            progress(finished, len(tasks))
+
+    outcome = run_sweep(
+        tasks, workers=sweep.get("workers"), scheduler=sweep.get("scheduler"), progress=chunk_done
+    )
+    robots, not_reached = _robot_surveys(loaded, outcome, owners, trajectories, failures)
+    return SurveyResult(
+        robots=tuple(robots),
+        failures=tuple(failures),
+        samples=samples,
+        seed=seed,
+        interrupted=outcome.interrupted,
+        not_reached=tuple(not_reached),
+        trajectory_settings=trajectories,
+    )
+
+
+#: One loaded robot of a survey: the robot, its note and its samples (neutral first).
+_Loaded = tuple[Robot, str, np.ndarray]
+
+
+def _load_robots(
+    specs: Sequence[str],
+    floating: bool | None,
+    samples: int,
+    seed: int,
+    failures: list[RobotFailure],
+) -> list[_Loaded]:
+    """Each robot that loads, with its samples; the others appended to ``failures``."""
+    loaded: list[_Loaded] = []
+    for spec in specs:
         try:
             robot, note = _load(spec, floating)
         except GimwatchError as exc:
@@ -282,16 +330,28 @@ def run_survey(
             [neutral_configuration(robot), _random_configurations(robot, samples, seed=seed)]
         )
         loaded.append((robot, note, qs))
+    return loaded
+
+
+def _survey_tasks(
+    loaded: list[_Loaded],
+    chunk_size: int,
+    runs_wanted: int,
+    trajectories: TrajectorySettings | None,
+) -> tuple[list[Task], list[tuple[int, int]]]:
+    """The sweep's tasks (chunks, then runs) and each one's owner (robot, first sample).
+
+    A run's owner carries minus the sample it starts from.
+    """
     tasks, owners = [], []
     for k, (robot, _, qs) in enumerate(loaded):
         for start in range(0, len(qs), chunk_size):
             chunk = qs[start : start + chunk_size]
-            args = (_worker_spec(robot.spec), robot.floating, chunk)
+            args: tuple = (_worker_spec(robot.spec), robot.floating, chunk)
             tasks.append(Task(_survey_chunk, args, cost_s=len(chunk) * _sample_cost_s(robot.nv)))
             owners.append((k, start))
-    runs_wanted = 0 if trajectories is None else min(trajectories.count, samples)
     for k, (robot, _, qs) in enumerate(loaded):
-        if runs_wanted == 0 or skip_reason(robot):
+        if trajectories is None or runs_wanted == 0 or skip_reason(robot):
             continue
         for start in range(1, 1 + runs_wanted):
             args = (_worker_spec(robot.spec), robot.floating, qs[start], start, trajectories)
@@ -299,15 +359,20 @@ def run_survey(
                 Task(_trajectory_task, args, cost_s=RUN_COST_S_PER_S * trajectories.duration_s)
             )
             owners.append((k, -start))  # negative: a run from that sample
-    finished = 0
+    return tasks, owners
 
-    def chunk_done(_: int) -> None:
-        nonlocal finished
-        finished += 1
-        if progress is not None:
-            progress(finished, len(tasks))
 
-    outcome = run_sweep(tasks, workers=workers, scheduler=scheduler, progress=chunk_done)
+def _robot_surveys(
+    loaded: list[_Loaded],
+    outcome: SweepOutcome,
+    owners: list[tuple[int, int]],
+    trajectories: TrajectorySettings | None,
+    failures: list[RobotFailure],
+) -> tuple[list[RobotSurvey], list[str]]:
+    """Each robot's survey from its chunks and runs; robots with a failed chunk in ``failures``.
+
+    Also the specs of robots no chunk of which finished (an interrupted survey).
+    """
     by_robot: dict[int, list] = {k: [] for k in range(len(loaded))}
     runs: dict[int, list] = {k: [] for k in range(len(loaded))}
     for i in sorted(outcome.results):  # task order: robot by robot, chunks ascending
@@ -332,15 +397,7 @@ def run_survey(
         if trajectories is not None:
             summary = replace(summary, trajectories=_trajectory_statistics(robot, runs[k]))
         robots.append(summary)
-    return SurveyResult(
-        robots=tuple(robots),
-        failures=tuple(failures),
-        samples=samples,
-        seed=seed,
-        interrupted=outcome.interrupted,
-        not_reached=tuple(not_reached),
-        trajectory_settings=trajectories,
-    )
+    return robots, not_reached
 
 
 def _trajectory_statistics(robot: Robot, parts: list) -> TrajectoryStatistics:
