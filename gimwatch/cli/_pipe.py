@@ -47,6 +47,8 @@ class QuietPipe:
 def discard_stdout(stream: TextIO | None = None) -> None:
     """Point the file descriptor of ``stream`` (stdout) at the null device."""
     stream = sys.__stdout__ if stream is None else stream
+    if stream is None:  # no stdout at all (pythonw): nothing to do
+        return
     try:
         descriptor = stream.fileno()
     except (AttributeError, OSError, ValueError):  # not a file (a test's capture): nothing to do

@@ -24,12 +24,15 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from types import FrameType
 
 __all__ = ["LATCH", "SignalLatch", "exit_status", "fault_pause"]
 
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 #: The signal that raises even while deferred: the user insists (a stuck load, a long step).
 _INSIST = 3
+#: What `signal.getsignal` returns and `signal.signal` accepts.
+_Handler = Callable[[int, FrameType | None], object] | int | signal.Handlers | None
 
 
 def exit_status(signum: int | None) -> int:
@@ -50,7 +53,7 @@ class SignalLatch:
         self.pending = False
         self._mode: str | None = None
         self._count = 0
-        self._previous: dict[int, object] = {}
+        self._previous: dict[int, _Handler] = {}
 
     def install(self) -> bool:
         """Install the handlers (main thread only); False when they could not be installed.
@@ -148,5 +151,5 @@ def fault_pause(phase: str) -> None:
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, signal.SIG_DFL if handler is None else handler)
-        for signum in received:
-            signal.raise_signal(signum)
+        for received_signum in received:
+            signal.raise_signal(received_signum)

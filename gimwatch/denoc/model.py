@@ -170,11 +170,15 @@ class DenocModel:
         q = _vector("q", q, self.nq)
         if self.linear is None:
             return LeanState(self.lean(), q, self._v_index)
+        return self._linear_state(self.linear, q)
+
+    def _linear_state(self, linear: LinearTimeModel, q: np.ndarray) -> ConfigurationState:
+        """The linear-time model's state at the checked ``q``."""
         first = q[self._q_index[1:]]
         second = q[np.minimum(self._q_index[1:] + 1, self.nq - 1)]
         # continuous joints hold (cos θ, sin θ); the compiled kernels take θ
         angle = np.where(self.tree.kind[1:] == 2, np.arctan2(second, first), first)
-        return self.linear.at(angle)
+        return linear.at(angle)
 
     def to_internal(self, name: str, x: npt.ArrayLike) -> np.ndarray:
         """A velocity-space vector in public order, checked, in internal (body) order."""
@@ -263,7 +267,7 @@ class DenocModel:
     ) -> np.ndarray:
         """τ = M(q) a + h(q, v) by the DeNOC recursions (Saha's τ = Nᵀ w), N·m or N."""
         if self.linear is not None:
-            tau = self.state(q).inverse_dynamics(
+            tau = self._linear_state(self.linear, _vector("q", q, self.nq)).inverse_dynamics(
                 self.to_internal("v", v),
                 self.to_internal("a", a),
                 gravity=_vector("gravity", gravity, 3),

@@ -28,6 +28,7 @@ from gimwatch.denoc.spatial import (
     shift_wrench,
 )
 from gimwatch.denoc.tree import BALL_KIND, FREE_KIND, BodyTree
+from gimwatch.errors import InputError
 
 __all__ = [
     "Kinematics",
@@ -105,9 +106,13 @@ def kinematics(
     joint_translation = tree.placement_translation + np.einsum(
         "kij,kj->ki", tree.placement_rotation, tree.axis * displacement[:, None]
     )
-    for i in np.flatnonzero(tree.kind >= FREE_KIND):  # placement, then the free motion
-        joint_rotation[i] = tree.placement_rotation[i] @ _quaternion_matrix(*free_pose[i, 3:7])
-        joint_translation[i] += tree.placement_rotation[i] @ free_pose[i, :3]  # ball: 0
+    free_rows = np.flatnonzero(tree.kind >= FREE_KIND)
+    if free_rows.size:  # placement, then the free motion
+        if free_pose is None:
+            raise InputError("free_pose", "an (N, 7) array: the tree has ball or free joints")
+        for i in free_rows:
+            joint_rotation[i] = tree.placement_rotation[i] @ _quaternion_matrix(*free_pose[i, 3:7])
+            joint_translation[i] += tree.placement_rotation[i] @ free_pose[i, :3]  # ball: 0
     rotation = np.empty((n, 3, 3))
     origin = np.zeros((n, 3))
     if root_pose is None:
@@ -216,11 +221,13 @@ class _Motion:
     bias: np.ndarray  # (N, 6) c_i: the velocity terms of ṫ_i = A ṫ_parent + p_i q̈_i + c_i
 
 
-def _motion(tree: BodyTree, kin: Kinematics, qd: np.ndarray, root_v: np.ndarray) -> _Motion:
+def _motion(tree: BodyTree, kin: Kinematics, qd: np.ndarray, root_v: np.ndarray | None) -> _Motion:
     """Twists ``t_i = A_{i,parent} t_parent + p_i q̇_i`` and the twist-rate bias terms c_i."""
     n = tree.size
     omega, velocity, bias = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 6))
     if tree.floating:
+        if root_v is None:
+            raise InputError("root_v", "the free-flyer's twist when the tree is floating")
         omega[0] = kin.rotation[0] @ root_v[3:]
         velocity[0] = kin.rotation[0] @ root_v[:3]
         bias[0, 3:] = cross(omega[0], velocity[0])
@@ -321,7 +328,9 @@ def forward_dynamics(
     _one_dof_only(tree)
     articulated = kin.M.copy()
     dynamic = tau is not None
-    if dynamic:
+    if tau is not None:
+        if qd is None:
+            raise InputError("qd", "the joint velocities when tau is given")
         motion = _motion(tree, kin, qd, root_v)
         bias = _body_bias(tree, kin, motion)
         start = 6 if tree.floating else 0
@@ -346,15 +355,15 @@ def forward_dynamics(
             accumulate(bias, parent, shift_wrench(carried, r))
     root_D = kin.p_root.T @ articulated[0] @ kin.p_root if tree.floating else None
     body_pivots = pivots[1:]
-    if tree.floating:
+    if root_D is not None:  # floating
         body_pivots = np.concatenate([udut_pivots_small(root_D), body_pivots])
-    if not dynamic:
+    if tau is None:
         return None, body_pivots
     rate = np.zeros((tree.size, 6))
     rate[0] = _root_rate(gravity)
     qdd = np.zeros(tree.size)
     root_a = np.zeros(0)
-    if tree.floating:
+    if root_D is not None:  # floating
         rate[0] += motion.bias[0]
         rhs = tau[:6] - kin.p_root.T @ (bias[0] + articulated[0] @ rate[0])
         root_a = np.linalg.solve(root_D, rhs)

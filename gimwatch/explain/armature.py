@@ -253,14 +253,18 @@ def minimal_armature(
     )
 
 
-def _applied(robot: Robot, qs: np.ndarray, added: np.ndarray):
+def _applied(
+    robot: Robot, qs: np.ndarray, added: np.ndarray
+) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
     """κ before and after, and the relative change of q̈ under gravity, with Pinocchio."""
     model = pin.Model(robot.model)
     data = model.createData()
     armed = pin.Model(robot.model)
     armed.armature = np.asarray(robot.model.armature) + added
     armed_data = armed.createData()
-    before, after, change = [], [], []
+    before: list[float] = []
+    after: list[float] = []
+    change: list[float] = []
     for q in qs:
         M = np.array(pin.crba(model, data, q))
         MA = np.array(pin.crba(armed, armed_data, q))

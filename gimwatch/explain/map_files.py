@@ -88,6 +88,7 @@ def write_map(result: ConditioningMap, output: str | Path) -> Path:
     columns = [X.ravel(), Y.ravel()] + [result.values[m].ravel() for m in metrics]
     with ResultsFolder(output, writer="map") as folder:
         staging = folder.staging
+        assert staging is not None  # made on entering the block
         write_text_atomic(staging / "map.csv", _csv(header + metrics, columns))
         record = {
             "robot": result.robot,
@@ -114,16 +115,18 @@ def write_trajectory_metrics(result: TrajectoryMetrics, output: str | Path) -> P
     """Write trajectory.csv and trajectory.png into ``output``; returns trajectory.csv."""
     from matplotlib.figure import Figure
 
-    index = np.arange(len(result.q), dtype=float)
-    first = ["t_s", index if result.time is None else result.time]
     if result.time is None:
-        first[0] = "sample"
+        first_name, first = "sample", np.arange(len(result.q), dtype=float)
+    else:
+        first_name, first = "t_s", result.time
     metrics = list(result.values)
-    text = _csv([first[0], *metrics], [first[1]] + [result.values[m] for m in metrics])
+    text = _csv([first_name, *metrics], [first] + [result.values[m] for m in metrics])
     with ResultsFolder(output, writer="map") as folder:
-        write_text_atomic(folder.staging / "trajectory.csv", text)
+        staging = folder.staging
+        assert staging is not None  # made on entering the block
+        write_text_atomic(staging / "trajectory.csv", text)
         fig = Figure(figsize=(7, 4), layout="constrained")
         plot_trajectory_metrics(result, ax=fig.subplots())
-        write_bytes_atomic(folder.staging / "trajectory.png", _png(fig))
+        write_bytes_atomic(staging / "trajectory.png", _png(fig))
         folder.commit()
     return Path(output) / "trajectory.csv"

@@ -174,8 +174,8 @@ def _layout(row: list[str], names: list[str], path: Path) -> _Layout:
                 ", ".join(header),
             )
         q_columns = [i for i in range(len(header)) if i != time_column]
-    timed = time_column is not None
-    return _Layout(True, ([time_column] if timed else []) + q_columns, len(header), timed)
+    time_columns = [] if time_column is None else [time_column]
+    return _Layout(True, time_columns + q_columns, len(header), time_column is not None)
 
 
 @dataclass(frozen=True)

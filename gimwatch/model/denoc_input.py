@@ -41,8 +41,14 @@ _INERTIA_ENTRIES = {
 }
 # The joints standing in for a ball and a free joint at one configuration, in Pinocchio's
 # velocity order (free-flyer: linear then angular).
-_BALL_PARTS = (("rx", "revolute", 0), ("ry", "revolute", 1), ("rz", "revolute", 2))
-_FREE_PARTS = (
+#: A stand-in joint: (name suffix, URDF joint type, axis index).
+_Part = tuple[str, str, int]
+_BALL_PARTS: tuple[_Part, ...] = (
+    ("rx", "revolute", 0),
+    ("ry", "revolute", 1),
+    ("rz", "revolute", 2),
+)
+_FREE_PARTS: tuple[_Part, ...] = (
     ("tx", "prismatic", 0),
     ("ty", "prismatic", 1),
     ("tz", "prismatic", 2),
@@ -210,7 +216,9 @@ def instantaneous_urdf(model: pin.Model, q: np.ndarray) -> InstantaneousURDF:
     """
     q = np.asarray(q, dtype=float)
     lines = ['<robot name="mjcf">', '<link name="base_link"/>']
-    names, order, q_out = {0: "base_link"}, [], []
+    names: dict[int, str] = {0: "base_link"}
+    order: list[str] = []
+    q_out: list[float] = []
     for k in range(1, model.njoints):
         joint, kind, name = model.joints[k], model.joints[k].shortname(), model.names[k]
         link = f"link_{k}"

@@ -9,8 +9,12 @@ from __future__ import annotations
 
 from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gimwatch.errors import RobotError
+
+if TYPE_CHECKING:  # example-robot-data ships no type information: RobotLoader reads as Any
+    from example_robot_data.robots_loader import RobotLoader
 
 __all__ = [
     "EXAMPLE_ROBOT_NOTES",
@@ -21,7 +25,7 @@ __all__ = [
 
 
 @cache
-def example_robot_loaders() -> dict[str, type]:
+def example_robot_loaders() -> dict[str, type[RobotLoader]]:
     """example-robot-data's loader classes by robot name (imported on first use)."""
     from example_robot_data.robots_loader import ROBOTS
 

@@ -103,9 +103,9 @@ _ELEMENT = re.compile(r"\s*Element (?:name )?'([^']*)'(?:, id \d+)?, line (\d+)\
 _PARSE = re.compile(r"XML parse error \d+: Error=(\w+).*Line number=(\d+)(?:: (.*))?")
 
 
-def mujoco_message(exc: Exception) -> str:
-    """MuJoCo's error text on one line, ending with the element and line it names."""
-    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+def mujoco_message(error: str) -> str:
+    """MuJoCo's error text ``error`` on one line, ending with the element and line it names."""
+    lines = [line.strip() for line in error.splitlines() if line.strip()]
     text = " ".join(lines).replace("XML Error: ", "").replace("Error: ", "")
     parse = _PARSE.search(text)
     if parse:
@@ -115,7 +115,7 @@ def mujoco_message(exc: Exception) -> str:
     if element:
         name = f"element '{element.group(1)}', " if element.group(1) else ""
         text = f"{text[: element.start()]} ({name}line {element.group(2)})"
-    return text or type(exc).__name__
+    return text or " ".join(lines)  # nothing but MuJoCo's prefix: keep it as written
 
 
 def _add_free_joint(spec, path) -> None:

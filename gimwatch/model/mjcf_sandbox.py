@@ -178,7 +178,7 @@ def compile_in_child(
 
 def _read_until(fd: int, deadline: float) -> bytes | None:
     """All the child writes before it closes the pipe, or None past ``deadline``."""
-    chunks = []
+    chunks: list[bytes] = []
     while True:
         left = deadline - time.monotonic()
         if left <= 0:

@@ -219,7 +219,7 @@ def _mjcf_mass_matrix(robot: Robot, mj_model, q: np.ndarray) -> np.ndarray:
 
     mj_q = np.array(mj_model.qpos0, dtype=float)
     qpos = qpos_from_q(robot.model, q)
-    dofs = []
+    dofs: list[int] = []
     for joint, j in zip(robot.model.joints[1:], robot.mujoco_joints, strict=True):
         start = int(mj_model.jnt_qposadr[j])
         mj_q[start : start + joint.nq] = qpos[joint.idx_q : joint.idx_q + joint.nq]

@@ -290,6 +290,7 @@ def animate_chain(
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import LogNorm
 
+    times = np.asarray(t, dtype=float)
     points = np.asarray(joint_xy)
     kappa = np.asarray(kappa)
     norm = LogNorm(vmin=kappa.min(), vmax=kappa.max())
@@ -310,7 +311,7 @@ def animate_chain(
     def draw(k):
         line.set_data(points[k, :, 0], points[k, :, 1])
         line.set_color(cmap(norm(kappa[k])))
-        label.set_text(f"t = {t[k]:.2f} s   κ₂ = {kappa[k]:.3g}")
+        label.set_text(f"t = {times[k]:.2f} s   κ₂ = {kappa[k]:.3g}")
         return line, label
 
     # no blitting: the text is outside the axes, which a blit would not redraw

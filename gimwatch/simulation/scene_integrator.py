@@ -88,6 +88,8 @@ def check_steps(source: str, integrator: IntegratorSpec, duration: float) -> Non
         if integrator.fixed_step
         else (integrator.max_step, "integrator.max_step")
     )
+    if step is None:  # an IntegratorSpec built in Python (a scene's table always has dt)
+        raise SceneError(source, key, f"is required by the fixed-step {integrator.method}")
     steps = duration / step
     if integrator.fixed_step and steps > MAX_FIXED_STEPS:
         raise SceneError(

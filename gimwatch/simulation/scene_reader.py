@@ -120,8 +120,10 @@ class TableReader:
             raise self.fail(name, f"must be one of {', '.join(choices)}, got {value!r}")
         return value
 
-    def vector3(self, name: str, default=None) -> tuple[float, float, float]:
-        """A list of 3 finite numbers."""
+    def vector3(
+        self, name: str, default: tuple[float, float, float] | None = None
+    ) -> tuple[float, float, float] | None:
+        """A list of 3 finite numbers (absent: ``default``)."""
         if name not in self.table:
             return default
         value = self.table[name]
@@ -136,7 +138,8 @@ class TableReader:
         if not all(math.isfinite(x) for x in numbers):
             shown = ", ".join(_describe(x) for x in value)
             raise self.fail(name, f"must be finite, got [{shown}]")
-        return tuple(numbers)
+        x, y, z = numbers
+        return (x, y, z)
 
     def joint_values(
         self, name: str, default=None, *, nonnegative=False, bound=math.inf

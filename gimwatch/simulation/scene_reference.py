@@ -62,9 +62,9 @@ def scene_reference() -> str:
         lines += [f"#### `{name}`", "", _summary(cls), ""]
         lines += _table("| key | kind | default | meaning |", _parameter_rows(cls.parameters))
     lines += ['### Torque laws (`[effects.torque] law = "<name>"`)', ""]
-    for name, cls in TORQUE_LAWS.items():
-        lines += [f"#### `{name}`", "", _summary(cls), ""]
-        lines += _table("| key | kind | default | meaning |", _parameter_rows(cls.parameters))
+    for name, law in TORQUE_LAWS.items():
+        lines += [f"#### `{name}`", "", _summary(law), ""]
+        lines += _table("| key | kind | default | meaning |", _parameter_rows(law.parameters))
     lines += ["### Integrators (`[integrator] method`)", ""]
     rows = [
         f"| `{name}` | {'`dt`' if cls.fixed_step else '`rtol`, `atol`, `max_step`'} | "

@@ -106,7 +106,7 @@ def gain_servos(robot: Robot, kp: float | Sequence[float], kd: float | Sequence[
 
 def mujoco_dofs(robot: Robot, mj_model) -> np.ndarray:
     """MuJoCo's DoF index of each of the robot's velocity coordinates."""
-    dofs = []
+    dofs: list[int] = []
     for joint_id in robot.mujoco_joints:
         start = int(mj_model.jnt_dofadr[joint_id])
         width = {0: 6, 1: 3}.get(int(mj_model.jnt_type[joint_id]), 1)

@@ -61,8 +61,8 @@ def _chain_case(name, family, description, spec, q_of_n, *, quick=False, no_sim=
     return StressCase(name, family, description, make, CHAIN_GRAVITY_M_S2, quick, spec, no_sim)
 
 
-def _geometric(n: int, first: float, last: float) -> np.ndarray:
-    return np.geomspace(first, last, n)
+def _geometric(n: int, first: float, last: float) -> list[float]:
+    return np.geomspace(first, last, n).tolist()
 
 
 def _robot_case(name, family, description, robot_name, q_update, *, floating=False, quick=False):

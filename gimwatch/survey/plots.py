@@ -57,6 +57,11 @@ def _robust_limits(values: np.ndarray) -> tuple[float, float]:
 TRACKS_WELL = 0.995
 
 
+def _joined(arrays: list[np.ndarray]) -> np.ndarray:
+    """The values of ``arrays``, flattened one after the other (none: an empty array)."""
+    return np.concatenate([np.ravel(a) for a in arrays]) if arrays else np.empty(0)
+
+
 def _format(value: float) -> str:
     return "—" if not math.isfinite(value) else f"{value:.2f}"
 
@@ -97,8 +102,8 @@ def plot_kappa_vs_delta(result: SurveyResult, ax=None):
             color=f"C{k % 10}",
             label=f"{robot.name} (r = {_format(robot.pearson_log)})",
         )
-    delta = np.concatenate([np.ravel(r.metrics["diagonal_ratio"]) for r in result.robots] or [[]])
-    kappa = np.concatenate([np.ravel(r.metrics["kappa"]) for r in result.robots] or [[]])
+    delta = _joined([r.metrics["diagonal_ratio"] for r in result.robots])
+    kappa = _joined([r.metrics["kappa"] for r in result.robots])
     xlim, ylim = _robust_limits(delta), _robust_limits(kappa)
     both = (min(xlim[0], ylim[0]), max(xlim[1], ylim[1]))
     ax.plot(both, both, "k--", linewidth=0.8, label="κ = δ (lower bound)")

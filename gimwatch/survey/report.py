@@ -166,6 +166,7 @@ def write_survey(
 
     with ResultsFolder(output, writer="survey") as folder:
         staging = folder.staging
+        assert staging is not None  # made on entering the block
         fig = Figure(figsize=(8, 6), layout="constrained")
         plot_kappa_vs_delta(result, ax=fig.subplots())
         write_bytes_atomic(staging / SCATTER_PNG, _png(fig))

@@ -74,8 +74,8 @@ def run_task(function: Callable[..., Any], *args: Any) -> Any:
 
 
 def _default_workers(tasks: Sequence[Task]) -> int:
-    costs = [task.cost_s for task in tasks]
-    if all(cost is not None for cost in costs) and sum(costs) < POOL_WORTH_S:
+    known = [task.cost_s for task in tasks if task.cost_s is not None]
+    if len(known) == len(tasks) and sum(known) < POOL_WORTH_S:
         return 1
     return os.cpu_count() or 1
 

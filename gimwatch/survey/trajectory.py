@@ -276,8 +276,8 @@ def summarize_runs(
 ) -> TrajectoryStatistics:
     """Per-robot statistics over the completed runs (see the module docstring)."""
     done = [run for run in runs if run.status == "completed"]
-    error = [relative_errors(r.kappa, r.scaled_diagonal_ratio) for r in done]
-    error = np.concatenate(error or [[]])
+    errors_per_run = [relative_errors(r.kappa, r.scaled_diagonal_ratio) for r in done]
+    error = np.concatenate(errors_per_run) if errors_per_run else np.empty(0)
     return TrajectoryStatistics(
         runs=tuple(runs),
         errors=tuple(errors),
