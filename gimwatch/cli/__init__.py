@@ -12,7 +12,6 @@ and exit status 130 or 143 (`gimwatch.cli._signals`).
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import sys
 import warnings
@@ -22,7 +21,7 @@ from types import ModuleType
 
 from gimwatch._version import __version__
 from gimwatch.cli._pipe import QuietPipe, discard_stdout
-from gimwatch.cli._signals import LATCH, fault_pause
+from gimwatch.cli._signals import LATCH
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.suggest import did_you_mean
 
@@ -241,11 +240,6 @@ def _run(argv: Sequence[str] | None) -> int:
     with LATCH.deferred("hard"):
         from threadpoolctl import threadpool_limits
 
-        if os.environ.get("GIMWATCH_FAULT_PAUSE"):  # fault tests: pause at a phase, get a signal
-            from gimwatch.output import folders
-
-            folders.phase_hook = fault_pause
-            fault_pause("import")
         argv = sys.argv[1:] if argv is None else list(argv)
         args = get_argument_parser(_command_in(argv) or "").parse_args(argv)
     LATCH.check()

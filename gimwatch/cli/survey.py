@@ -16,7 +16,7 @@ from gimwatch.cli._format import (
     positive_int,
     table,
 )
-from gimwatch.cli._signals import LATCH, fault_pause
+from gimwatch.cli._signals import LATCH
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.output.folders import Reservation
 from gimwatch.simulation.scene_integrator import DEFAULT_MAX_STEPS
@@ -172,7 +172,6 @@ def _survey(args: argparse.Namespace):
     ) as bar:
 
         def progress(finished: int, total: int) -> None:
-            fault_pause("compute")
             bar.total = total
             bar.update(finished - bar.n)
 

@@ -16,6 +16,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
+from gimwatch.joint_kinds import joint_kind, length_positions
 
 __all__ = [
     "DEFAULT_MAX_RANDOM_WORK",
@@ -55,10 +56,7 @@ class Robot(Protocol):
 
 def unit_block_size(joint: pin.JointModel) -> int:
     """Size of the unit-norm part of a joint's q (4 for quaternions, 2 for unit complex)."""
-    if joint.nq == joint.nv:
-        return 0
-    kind = joint.shortname()
-    return 4 if ("Spherical" in kind or "FreeFlyer" in kind) else 2
+    return joint_kind(joint).unit_block
 
 
 #: A joint limit this large (or infinite) is a placeholder for "unlimited" (URDF writers put
@@ -145,11 +143,7 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
         start, stop = joint.idx_q, joint.idx_q + joint.nq
         unit = unit_block_size(joint)
         box = slice(start, stop - unit)
-        default = (
-            _DEFAULT_ANGLE_RAD
-            if joint.shortname().startswith("JointModelR")
-            else (_DEFAULT_TRANSLATION_M)
-        )
+        default = _DEFAULT_TRANSLATION_M if length_positions(joint) else _DEFAULT_ANGLE_RAD
         boxes += range(start, stop - unit)
         lows.append(np.where(is_real_limit(lower[box]), lower[box], -default))
         highs.append(np.where(is_real_limit(upper[box]), upper[box], default))

@@ -27,7 +27,7 @@ import os
 import shutil
 import stat
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from pathlib import Path
 from types import TracebackType
 
@@ -49,23 +49,11 @@ __all__ = [
     "ResultsFolder",
     "check_folder_target",
     "is_results_folder",
-    "phase_hook",
     "write_marker",
 ]
 
 #: The file that makes a folder a gimwatch results folder.
 MARKER = ".gimwatch-results.json"
-
-
-#: Called with the name of each phase of a write (``"write"``: the files are in the staging
-#: folder; ``"swap"``: the new folder is in place, the previous one not yet deleted). The
-#: command line sets it for its fault tests (``GIMWATCH_FAULT_PAUSE``).
-phase_hook: Callable[[str], None] | None = None
-
-
-def _phase(name: str) -> None:
-    if phase_hook is not None:
-        phase_hook(name)
 
 
 def _problem(exc: OSError) -> str:
@@ -296,7 +284,6 @@ class ResultsFolder(Reservation):
         """
         if self.staging is None:
             raise RuntimeError("commit() outside the with block")
-        _phase("write")
         try:
             os.chmod(self.staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
             # the record stays until the swap is done (swap): a writer killed before then
@@ -318,7 +305,6 @@ class ResultsFolder(Reservation):
                 check_folder_target(self.target)
                 swap(self.staging, self.target)
                 self.committed = True
-                _phase("swap")
                 _remove_previous(self.staging)
         except OSError as exc:
             raise OutputError(self.shown, _problem(exc)) from exc
