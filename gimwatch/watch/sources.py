@@ -278,7 +278,7 @@ class MujocoSource:
                 raise InputError(f"joint '{name}'", f"{joint.nv} dof in MuJoCo too", dofs)
             start = int(model.jnt_dofadr[j])
             order[joint.idx_v : joint.idx_v + joint.nv] = np.arange(start, start + dofs)
-            if "FreeFlyer" in kind:
+            if kind is JointKind.FREE_FLYER:
                 self._free.append((joint.idx_v, int(model.jnt_qposadr[j]) + 3))
         if np.any(order < 0) or np.unique(order).size != order.size:
             raise InputError("robot", "a one-to-one joint match with the MuJoCo model", "none")
