@@ -150,11 +150,10 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
         if unit:
             units.append(slice(stop - unit, stop))
     width_normal = sum(block.stop - block.start for block in units)
-    uniform, normal = configuration_draws(seed, count, len(boxes), width_normal)
     qs = np.empty((count, model.nq))
     if boxes:
-        lo, hi = np.concatenate(lows), np.concatenate(highs)
-        qs[:, boxes] = lo + (hi - lo) * uniform
+        qs[:, boxes] = uniform_in_limits(np.concatenate(lows), np.concatenate(highs), count, seed)
+    _, normal = configuration_draws(seed, count, 0, width_normal)
     column = 0
     for block in units:
         width = block.stop - block.start
@@ -162,6 +161,20 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
         qs[:, block] = drawn / np.linalg.norm(drawn, axis=1, keepdims=True)
         column += width
     return qs
+
+
+def uniform_in_limits(
+    lower: npt.ArrayLike, upper: npt.ArrayLike, count: int, seed: int | None
+) -> np.ndarray:
+    """``count`` configurations uniform in the box [lower, upper], shape ``(count, width)``.
+
+    The boxed coordinates of `random_configurations`, and the whole of a robot without unit
+    blocks (a generated chain, from its `ChainSpec.position_limits`): row k depends only on
+    (seed, k).
+    """
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    uniform, _ = configuration_draws(seed, count, lo.size, 0)
+    return lo + (hi - lo) * uniform
 
 
 def configuration_draws(
