@@ -16,7 +16,6 @@ from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, random_configuratio
 from gimwatch.stability.step_maps import INTEGRATORS
 
 NAME = "armature"
-HELP = "the least joint armature that brings kappa under a target, and what it costs"
 #: More configurations than this make each cutting-plane round slow; sample fewer.
 MAX_SAMPLES = 100_000
 #: Random configurations of the κ target when neither --q nor --samples is given.

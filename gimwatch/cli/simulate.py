@@ -17,7 +17,6 @@ from gimwatch.simulation.scene import load_scene
 from gimwatch.simulation.simulate import Simulation
 
 NAME = "simulate"
-HELP = "simulate a scene (TOML) and watch the conditioning of M(q)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

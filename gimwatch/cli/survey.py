@@ -25,7 +25,6 @@ from gimwatch.survey.run import run_survey
 from gimwatch.survey.trajectory import TrajectorySettings
 
 NAME = "survey"
-HELP = "does the diagonal ratio track kappa? a report over many robots and configurations"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
