@@ -150,10 +150,10 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
         if unit:
             units.append(slice(stop - unit, stop))
     width_normal = sum(block.stop - block.start for block in units)
+    uniform, normal = configuration_draws(seed, count, len(boxes), width_normal)
     qs = np.empty((count, model.nq))
     if boxes:
-        qs[:, boxes] = uniform_in_limits(np.concatenate(lows), np.concatenate(highs), count, seed)
-    _, normal = configuration_draws(seed, count, 0, width_normal)
+        qs[:, boxes] = in_limits(np.concatenate(lows), np.concatenate(highs), uniform)
     column = 0
     for block in units:
         width = block.stop - block.start
@@ -172,8 +172,14 @@ def uniform_in_limits(
     blocks (a generated chain, from its `ChainSpec.position_limits`): row k depends only on
     (seed, k).
     """
-    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    lo = np.asarray(lower, dtype=float)
     uniform, _ = configuration_draws(seed, count, lo.size, 0)
+    return in_limits(lo, upper, uniform)
+
+
+def in_limits(lower: npt.ArrayLike, upper: npt.ArrayLike, uniform: np.ndarray) -> np.ndarray:
+    """Uniforms in [0, 1) mapped to [lower, upper), coordinate by coordinate."""
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     return lo + (hi - lo) * uniform
 
 
