@@ -292,3 +292,45 @@ def test_the_layer_table_is_read_from_the_page():
         f"not in the package {sorted(set(LAYERS) - tops)}"
     )
     assert sorted(set(LAYERS.values())) == list(range(1, max(LAYERS.values()) + 1))
+
+
+def package_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """Top-level package or module -> those it imports (``gimwatch.metrics.x`` -> ``metrics``)."""
+
+    def top(module: str) -> str:
+        return module.split(".")[1] if "." in module else "__init__"
+
+    packages: dict[str, set[str]] = {}
+    for module, targets in graph.items():
+        packages.setdefault(top(module), set()).update(
+            top(target) for target in targets if top(target) != top(module)
+        )
+    return packages
+
+
+def test_no_circles_between_packages():
+    """Two packages of one layer never import each other (metrics <-> stability was one)."""
+    cycles = import_cycles(package_graph(import_graph()))
+    assert not cycles, "packages that import each other (directly or around a circle):\n" + (
+        "\n".join("  " + " <-> ".join(c) for c in cycles)
+    )
+
+
+def test_the_package_circle_check_finds_a_planted_circle():
+    graph = import_graph()
+    graph["gimwatch.stability.servos"] = graph["gimwatch.stability.servos"] | {
+        "gimwatch.metrics.conditioning"
+    }
+    assert ["metrics", "stability"] in import_cycles(package_graph(graph))
+
+
+def test_the_library_carries_no_test_hooks():
+    """Fault tests pause a command by wrapping its functions (tests/fault_pause.py)."""
+    hooks = ("FAULT_PAUSE", "phase_hook", "fault_pause")
+    found = [
+        f"{path.relative_to(ROOT)}: {hook}"
+        for path in _modules()
+        for hook in hooks
+        if hook in path.read_text(encoding="utf-8")
+    ]
+    assert not found, "test hooks in library code:\n  " + "\n  ".join(found)

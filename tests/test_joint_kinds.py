@@ -9,6 +9,9 @@ norm), nq and nv.
 
 from __future__ import annotations
 
+import ast
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -161,3 +164,16 @@ def test_axis_of_one_axis_joints(joint, kind, nq, nv):
     expected = S[3:] if turning else S[:3]
     assert joint_axis(model.joints[1]) == pytest.approx(expected, abs=1e-12)
     assert joint_axis(joint) == pytest.approx(expected, abs=1e-12)  # the typed model too
+
+
+def test_only_joint_kinds_reads_pinocchio_joint_class_names():
+    """One answer to "what kind of joint?": no other module calls ``shortname()``."""
+    root = Path(__file__).resolve().parents[1] / "gimwatch"
+    callers = [
+        f"{path.relative_to(root.parent)}:{node.lineno}"
+        for path in sorted(root.rglob("*.py"))
+        if path.name != "joint_kinds.py"
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        if isinstance(node, ast.Attribute) and node.attr == "shortname"
+    ]
+    assert not callers, "ask gimwatch.joint_kinds instead:\n  " + "\n  ".join(callers)
