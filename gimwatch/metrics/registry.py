@@ -459,8 +459,8 @@ METRICS: Registry[type[Metric]] = Registry(
     ),
 )
 
-#: Class decorator: add a metric to `METRICS` under its ``name``.
 register = METRICS.register
+"""Class decorator: add a metric to `METRICS` under its ``name``."""
 
 
 def evaluate(names, state: GimState, metrics: dict[str, Metric] | None = None) -> dict:

@@ -84,8 +84,8 @@ class AlarmAction:
 ALARM_ACTIONS: Registry[type[AlarmAction]] = Registry("on_alarm action")
 
 
-#: Class decorator: add an action to `ALARM_ACTIONS` under its ``name``.
 register = ALARM_ACTIONS.register
+"""Class decorator: add an action to `ALARM_ACTIONS` under its ``name``."""
 
 
 @register

@@ -92,8 +92,8 @@ class Effect:
 EFFECTS: Registry[type[Effect]] = Registry("effect")
 
 
-#: Class decorator: add an effect to `EFFECTS` under its ``name``.
 register = EFFECTS.register
+"""Class decorator: add an effect to `EFFECTS` under its ``name``."""
 
 
 @register

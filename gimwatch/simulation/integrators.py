@@ -135,8 +135,8 @@ class Integrator:
 INTEGRATORS: Registry[type[Integrator]] = Registry("integrator")
 
 
-#: Class decorator: add an integrator to `INTEGRATORS` under its ``name``.
 register = INTEGRATORS.register
+"""Class decorator: add an integrator to `INTEGRATORS` under its ``name``."""
 
 
 # -- adaptive (SciPy) -------------------------------------------------------------------

@@ -84,8 +84,8 @@ class TorqueLaw:
 TORQUE_LAWS: Registry[type[TorqueLaw]] = Registry("torque law")
 
 
-#: Class decorator: add a torque law to `TORQUE_LAWS` under its ``name``.
 register = TORQUE_LAWS.register
+"""Class decorator: add a torque law to `TORQUE_LAWS` under its ``name``."""
 
 
 _VALUE = Parameter("value", "joint", doc="constant torque τ₀ (N·m or N), default 0")
