@@ -198,9 +198,9 @@ MUTANTS = (
     ),
     Mutant(
         "urdf-of-model-continuous-as-revolute",
-        "gimwatch/model/denoc_input.py",
-        '**{f"JointModelRUB{a}": "continuous" for a in "XYZ"},',
-        '**{f"JointModelRUB{a}": "revolute" for a in "XYZ"},',
+        "gimwatch/joint_kinds.py",
+        '**{f"RUB{a}": JointKind.CONTINUOUS for a in "XYZ"},',
+        '**{f"RUB{a}": JointKind.REVOLUTE for a in "XYZ"},',
         ("tests/test_denoc_input.py",),
         "a continuous joint written as a revolute one: DeNOC reads (cos θ, sin θ) as two angles",
     ),

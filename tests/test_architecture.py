@@ -17,29 +17,27 @@ PAGE = ROOT / "docs" / "architecture.md"
 
 #: One row of the module map: | `gimwatch/x/y.py` | its one job |
 ROW = re.compile(r"^\| `(gimwatch/[^`]+\.py)` \| (.*) \|\s*$")
-#: The import layers of the page, top (1) to bottom; a module imports from its layer or above.
-LAYERS = {
-    "errors": 1,
-    "_version": 1,
-    "suggest": 1,
-    "output": 1,
-    "jit": 1,
-    "model": 2,
-    "denoc": 3,
-    "crosscheck": 4,
-    "metrics": 4,
-    "watch": 4,
-    "stability": 4,
-    "simulation": 5,
-    "stress": 6,
-    "survey": 6,
-    "bench": 6,
-    "demo": 6,
-    "explain": 6,
-    "cli": 7,
-    "__main__": 7,
-    "__init__": 7,
-}
+#: One row of the page's layer table: | 3 | `denoc`, `stability` (a remark) |
+LAYER_ROW = re.compile(r"^\| (\d+) \| (.*) \|\s*$")
+
+
+def _layers() -> dict[str, int]:
+    """The import layers of the page's table, top (1) to bottom: package or module -> layer.
+
+    The names are those in backticks outside parentheses (a remark may quote a name).
+    """
+    layers = {}
+    for line in PAGE.read_text(encoding="utf-8").splitlines():
+        match = LAYER_ROW.match(line)
+        if match:
+            names = re.sub(r"\([^)]*\)", "", match.group(2))
+            for name in re.findall(r"`([^`]+)`", names):
+                layers[name] = int(match.group(1))
+    return layers
+
+
+#: The import layers of the page; a module imports from its layer or the layers above it.
+LAYERS = _layers()
 
 
 def _modules() -> list[Path]:
@@ -145,7 +143,7 @@ def test_imports_point_down_the_layers(path):
     source = parts[0]
     assert source in LAYERS, (
         f"{path.relative_to(ROOT)}: '{source}' has no layer; add it to the layer table in "
-        "docs/architecture.md and to LAYERS in tests/test_architecture.py"
+        "docs/architecture.md"
     )
     upward = []
     for line, module, _ in _gimwatch_imports(path):
@@ -281,3 +279,58 @@ def test_the_cycle_check_finds_a_planted_cycle():
     graph["gimwatch.errors"] = graph["gimwatch.errors"] | {"gimwatch.model.robots"}
     cycles = import_cycles(graph)
     assert any({"gimwatch.errors", "gimwatch.model.robots"} <= set(c) for c in cycles)
+
+
+def test_the_layer_table_is_read_from_the_page():
+    """Every top-level package and module has exactly one layer, from 1 to the last."""
+    tops = {p.name.removesuffix(".py") for p in PACKAGE.iterdir() if p.name != "__pycache__"}
+    tops = {t for t in tops if (PACKAGE / t).is_dir() or (PACKAGE / f"{t}.py").is_file()}
+    tops -= {"scenes"}  # package data (scene files), no Python
+    assert LAYERS, f"{PAGE} has no layer table rows of the form | 1 | `errors`, ... |"
+    assert set(LAYERS) == tops, (
+        f"layer table of {PAGE}: missing {sorted(tops - set(LAYERS))}, "
+        f"not in the package {sorted(set(LAYERS) - tops)}"
+    )
+    assert sorted(set(LAYERS.values())) == list(range(1, max(LAYERS.values()) + 1))
+
+
+def package_graph(graph: dict[str, set[str]]) -> dict[str, set[str]]:
+    """Top-level package or module -> those it imports (``gimwatch.metrics.x`` -> ``metrics``)."""
+
+    def top(module: str) -> str:
+        return module.split(".")[1] if "." in module else "__init__"
+
+    packages: dict[str, set[str]] = {}
+    for module, targets in graph.items():
+        packages.setdefault(top(module), set()).update(
+            top(target) for target in targets if top(target) != top(module)
+        )
+    return packages
+
+
+def test_no_circles_between_packages():
+    """Two packages of one layer never import each other (metrics <-> stability was one)."""
+    cycles = import_cycles(package_graph(import_graph()))
+    assert not cycles, "packages that import each other (directly or around a circle):\n" + (
+        "\n".join("  " + " <-> ".join(c) for c in cycles)
+    )
+
+
+def test_the_package_circle_check_finds_a_planted_circle():
+    graph = import_graph()
+    graph["gimwatch.stability.servos"] = graph["gimwatch.stability.servos"] | {
+        "gimwatch.metrics.conditioning"
+    }
+    assert ["metrics", "stability"] in import_cycles(package_graph(graph))
+
+
+def test_the_library_carries_no_test_hooks():
+    """Fault tests pause a command by wrapping its functions (tests/fault_pause.py)."""
+    hooks = ("FAULT_PAUSE", "phase_hook", "fault_pause")
+    found = [
+        f"{path.relative_to(ROOT)}: {hook}"
+        for path in _modules()
+        for hook in hooks
+        if hook in path.read_text(encoding="utf-8")
+    ]
+    assert not found, "test hooks in library code:\n  " + "\n  ".join(found)

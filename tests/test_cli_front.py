@@ -23,7 +23,16 @@ def run(capsys, *argv):
 def test_command_table_matches_the_modules():
     for name, module in _commands().items():
         assert module.NAME == name
-        assert COMMANDS[name][1] == module.HELP, name
+        assert COMMANDS[name][0] == module.__name__
+        assert not hasattr(module, "HELP"), f"{name}: its help is written in COMMANDS only"
+
+
+def test_the_one_line_help_is_the_command_tables(capsys):
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    listing = " ".join(capsys.readouterr().out.split())
+    for name, (_, summary) in COMMANDS.items():
+        assert f"{name} {' '.join(summary.split())}" in listing, name
 
 
 @pytest.mark.parametrize("name", sorted(COMMANDS))

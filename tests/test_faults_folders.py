@@ -4,8 +4,9 @@ Every case ends in one of two ways: exit status 2 and one line naming the path, 
 previous or the new result intact (its marker lists exactly its entries), with nothing else
 beside it (no staging folder, no lock file) and nothing of the user's deleted.
 
-Signals are sent at chosen moments through the ``GIMWATCH_FAULT_PAUSE`` hook: the command
-prints ``gimwatch: paused at PHASE`` and waits for the signal, so no test depends on timing.
+Signals are sent at chosen moments: the command runs under ``tests/fault_pause.py``, which
+makes it print ``gimwatch: paused at PHASE`` and wait for the signal, so no test depends on
+timing.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from gimwatch.cli._signals import SignalLatch
 from gimwatch.output.folders import MARKER, ResultsFolder
 
 ROOT = Path(gimwatch.__file__).resolve().parents[1]
+FAULT_PAUSE = Path(__file__).with_name("fault_pause.py")  # python -m gimwatch, paused at a phase
 SCENE = """robot = "chain:3"
 duration = {duration}
 sample = 0.01
@@ -90,9 +92,9 @@ def old_simulation(tmp_path, capsys):
 
 def _start(args: list[str], phase: str, cwd: Path) -> subprocess.Popen:
     """``python -m gimwatch ARGS`` paused at ``phase`` (returns once it says so)."""
-    env = dict(os.environ, GIMWATCH_FAULT_PAUSE=phase, PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
     process = subprocess.Popen(
-        [sys.executable, "-m", "gimwatch", *args],
+        [sys.executable, str(FAULT_PAUSE), phase, *args],
         cwd=cwd,
         env=env,
         stdout=subprocess.PIPE,

@@ -4,7 +4,7 @@ After ``renameat2(RENAME_EXCHANGE)`` the staging path holds the previous folder.
 carry no staging record, so the next writer's clean-up skipped it and the previous results
 stayed under ``.NAME.gimwatch-staging-*`` forever. Now it carries the record: the next writer
 removes it (the swap was complete), or puts it back when nothing is at the folder's name.
-The moment is reached through the ``GIMWATCH_FAULT_PAUSE=swap`` hook of the command line.
+The moment is reached by running the command under ``tests/fault_pause.py`` (phase ``swap``).
 """
 
 from __future__ import annotations
@@ -44,9 +44,10 @@ def _hidden(parent: Path) -> list[str]:
 
 
 def _killed_at_swap(scene: Path, out: Path) -> None:
-    env = dict(os.environ, GIMWATCH_FAULT_PAUSE="swap", PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    launcher = Path(__file__).with_name("fault_pause.py")
     process = subprocess.Popen(
-        [sys.executable, "-m", "gimwatch", "simulate", str(scene), "-o", str(out)],
+        [sys.executable, str(launcher), "swap", "simulate", str(scene), "-o", str(out)],
         cwd=scene.parent,
         env=env,
         stderr=subprocess.PIPE,

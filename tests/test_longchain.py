@@ -83,19 +83,20 @@ def test_compiled_recursions_match_pinocchio(name):
         )
 
 
-def test_chain_configurations_are_those_of_random_configurations():
+def test_chain_limits_are_those_pinocchio_reads_and_configurations_stay_inside():
+    """One source of a chain's limits: what its URDF says, drawn without a Pinocchio model."""
     spec = chain_spec(25, joint_types=["revolute", "prismatic"] * 12 + ["revolute"])
-    robot = Robot(
-        name="c",
-        spec="c",
-        model=pin.buildModelFromXML(generate_chain_urdf(spec)),
-        urdf_xml="",
-        source="<test>",
-    )
-    for count in (1, 4):
-        np.testing.assert_array_equal(
-            chain_configurations(spec, count, seed=9), random_configurations(robot, count, seed=9)
-        )
+    model = pin.buildModelFromXML(generate_chain_urdf(spec))
+    lower, upper = spec.position_limits()
+    np.testing.assert_array_equal(lower, model.lowerPositionLimit)
+    np.testing.assert_array_equal(upper, model.upperPositionLimit)
+    np.testing.assert_array_equal(upper[::2], np.pi)  # revolute: a full turn
+    np.testing.assert_array_equal(upper[1::2], np.asarray(spec.lengths_m[1::2]) / 2)  # rod/2
+    robot = Robot(name="c", spec="c", model=model, urdf_xml="", source="<test>")
+    many = chain_configurations(spec, 400, seed=9)
+    assert np.all((lower <= many) & (many < upper))
+    # the two ways in (analyze's O(n) path, and every other command) draw the same q
+    np.testing.assert_array_equal(many[:4], random_configurations(robot, 4, seed=9))
 
 
 @pytest.mark.parametrize("n", [5, 40, 200])

@@ -30,6 +30,7 @@ import scipy.linalg
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.plots import EPS, plot_digits
 from gimwatch.bench.report import markdown_table
+from gimwatch.joint_kinds import length_positions
 from gimwatch.metrics.conditioning import condition_number, diagonal_ratio, pivot_ratio_backward
 from gimwatch.metrics.equilibrated import equilibrated_extremes
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
@@ -137,11 +138,7 @@ def _length_coordinates(model: pin.Model) -> np.ndarray:
     """Mask of the q coordinates that are lengths (prismatic, free-flyer translation)."""
     mask = np.zeros(model.nq, dtype=bool)
     for joint in model.joints[1:]:
-        kind = joint.shortname()
-        if "FreeFlyer" in kind:
-            mask[joint.idx_q : joint.idx_q + 3] = True
-        elif "Prismatic" in kind or kind.startswith("JointModelP"):
-            mask[joint.idx_q : joint.idx_q + joint.nq] = True
+        mask[joint.idx_q : joint.idx_q + length_positions(joint)] = True
     return mask
 
 

@@ -1,18 +1,17 @@
 """The ``gimwatch`` command line: parse, call the library, print.
 
 This package is the only place that prints or exits. Each subcommand lives in its own
-module with ``NAME``, ``HELP``, ``add_arguments(parser)`` and ``run(args) -> int``;
-`COMMANDS` maps each name to its module and one-line help. Only the module of the
-command being run is imported (a command's imports cost nothing to the others, nor to
-``gimwatch --help``). Errors gimwatch raises on purpose become one line on stderr and exit
-status 2; a mistyped command gets a suggestion. SIGINT and SIGTERM end a command with one line
-and exit status 130 or 143 (`gimwatch.cli._signals`).
+module with ``NAME``, ``add_arguments(parser)`` and ``run(args) -> int`` (its docstring is
+the command's description); `COMMANDS` maps each name to its module and its one-line help.
+Only the module of the command being run is imported (a command's imports cost nothing to
+the others, nor to ``gimwatch --help``). Errors gimwatch raises on purpose become one line
+on stderr and exit status 2; a mistyped command gets a suggestion. SIGINT and SIGTERM end a
+command with one line and exit status 130 or 143 (`gimwatch.cli._signals`).
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import re
 import sys
 import warnings
@@ -22,7 +21,7 @@ from types import ModuleType
 
 from gimwatch._version import __version__
 from gimwatch.cli._pipe import QuietPipe, discard_stdout
-from gimwatch.cli._signals import LATCH, fault_pause
+from gimwatch.cli._signals import LATCH
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.suggest import did_you_mean
 
@@ -36,8 +35,8 @@ class UsageError(GimwatchError):
     """A command line argparse rejected."""
 
 
-#: Command name -> (module, one-line help). The help is repeated here so that listing the
-#: commands imports none of them; tests check it equals the module's ``HELP``.
+#: Command name -> (module, one-line help): the one place a command's help is written, so
+#: that listing the commands imports none of them.
 COMMANDS: dict[str, tuple[str, str]] = {
     "chain": ("gimwatch.cli.chain", "write the URDF of an n-link chain of homogeneous rods"),
     "analyze": (
@@ -163,7 +162,7 @@ def get_argument_parser(command: str | None = None) -> argparse.ArgumentParser:
         module = import_module(module_name)
         parser_ = sub.add_parser(
             name,
-            help=module.HELP,
+            help=summary,
             description=module.__doc__,
             formatter_class=HelpFormatter,
         )
@@ -241,11 +240,6 @@ def _run(argv: Sequence[str] | None) -> int:
     with LATCH.deferred("hard"):
         from threadpoolctl import threadpool_limits
 
-        if os.environ.get("GIMWATCH_FAULT_PAUSE"):  # fault tests: pause at a phase, get a signal
-            from gimwatch.output import folders
-
-            folders.phase_hook = fault_pause
-            fault_pause("import")
         argv = sys.argv[1:] if argv is None else list(argv)
         args = get_argument_parser(_command_in(argv) or "").parse_args(argv)
     LATCH.check()

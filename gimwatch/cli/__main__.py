@@ -1,5 +1,5 @@
 """``python -m gimwatch.cli``."""
 
-from gimwatch.__main__ import entry_point
+from gimwatch.cli.startup import entry_point
 
 entry_point()

@@ -17,16 +17,13 @@ The exit status says which signal came first: 130 for SIGINT, 143 for SIGTERM (1
 
 from __future__ import annotations
 
-import os
 import signal
-import sys
 import threading
-import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-__all__ = ["LATCH", "SignalLatch", "exit_status", "fault_pause"]
+__all__ = ["LATCH", "SignalLatch", "exit_status"]
 
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 #: The signal that raises even while deferred: the user insists (a stuck load, a long step).
@@ -120,36 +117,3 @@ class SignalLatch:
 
 #: The command line's latch.
 LATCH = SignalLatch()
-
-
-_paused: set[str] = set()
-
-
-def fault_pause(phase: str) -> None:
-    """Test hook: with ``GIMWATCH_FAULT_PAUSE=phase``, stop here until a signal arrives.
-
-    Prints ``gimwatch: paused at PHASE`` on stderr, waits (at most ten minutes: a loaded test
-    machine may take long to send it) for SIGINT or SIGTERM, then delivers it to the handler
-    in place, as if it had arrived at this point.
-    Fault tests use it to signal a command at a chosen moment: ``import`` (before the
-    command's modules are imported), ``compute`` (after the first step or chunk), ``write``
-    (the files are in the staging folder), ``swap`` (the new folder is in place, the
-    previous one not yet deleted); ``startup`` is in `gimwatch.__main__`.
-    """
-    if os.environ.get("GIMWATCH_FAULT_PAUSE") != phase or phase in _paused:
-        return
-    _paused.add(phase)
-    if threading.current_thread() is not threading.main_thread():
-        return
-    received: list[int] = []
-    previous = {s: signal.signal(s, lambda n, _: received.append(n)) for s in _SIGNALS}
-    try:
-        print(f"gimwatch: paused at {phase}", file=sys.stderr, flush=True)
-        deadline = time.monotonic() + 600.0
-        while not received and time.monotonic() < deadline:
-            time.sleep(0.005)
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
-        for received_signum in received:
-            signal.raise_signal(received_signum)

@@ -23,7 +23,6 @@ from gimwatch.model.sampling import placeholder_note
 NAME = "analyze"
 #: More configurations than this would print a table nobody reads; use ``survey``.
 MAX_RANDOM = 100_000
-HELP = "conditioning of M(q): kappa, diagonal ratio, pivot ratios, spectrum"
 #: ``--csv`` columns, one row per configuration (vectors ``;``-separated).
 CSV_COLUMNS = (
     "config",

@@ -10,12 +10,12 @@ from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.cli._records import json_text
 from gimwatch.errors import InputError
 from gimwatch.explain.armature import MAX_MATRIX_BYTES, max_configurations, minimal_armature
+from gimwatch.joint_kinds import length_velocities
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, random_configurations
 from gimwatch.stability.step_maps import INTEGRATORS
 
 NAME = "armature"
-HELP = "the least joint armature that brings kappa under a target, and what it costs"
 #: More configurations than this make each cutting-plane round slow; sample fewer.
 MAX_SAMPLES = 100_000
 #: Random configurations of the κ target when neither --q nor --samples is given.
@@ -76,15 +76,8 @@ def _armature_units(model) -> list[str]:
     """The unit of each velocity coordinate's armature: kg·m² turning, kg sliding."""
     units = []
     for joint in model.joints[1:]:
-        kind = joint.shortname()
-        if "Prismatic" in kind or (kind.startswith("JointModelP") and "Planar" not in kind):
-            units += ["kg"] * joint.nv
-        elif "FreeFlyer" in kind:
-            units += ["kg"] * 3 + ["kg*m^2"] * 3
-        elif "Planar" in kind:
-            units += ["kg"] * 2 + ["kg*m^2"]
-        else:
-            units += ["kg*m^2"] * joint.nv
+        sliding = length_velocities(joint)  # the first `sliding` coordinates translate
+        units += ["kg"] * sliding + ["kg*m^2"] * (joint.nv - sliding)
     return units
 
 

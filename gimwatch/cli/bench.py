@@ -11,7 +11,6 @@ from gimwatch.cli._format import non_negative_int
 from gimwatch.errors import InputError, OutputError
 
 NAME = "bench"
-HELP = "what accuracy costs in time: tables, plots and a Markdown report"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -16,7 +16,6 @@ from gimwatch.model.chains import (
 from gimwatch.output.atomic import write_text_atomic
 
 NAME = "chain"
-HELP = "write the URDF of an n-link chain of homogeneous rods"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -32,7 +32,6 @@ from gimwatch.errors import GimwatchError
 from gimwatch.model.robots import example_robot_names, load_robot
 
 NAME = "crosscheck"
-HELP = "compare DeNOC with Pinocchio (crba, rnea, aba, cholesky) at random states"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

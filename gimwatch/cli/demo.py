@@ -15,7 +15,6 @@ from gimwatch.demo import run_demo
 from gimwatch.errors import InputError
 
 NAME = "demo"
-HELP = "the main job: the paper's swinging 4-, 10- and 20-link chains, watched"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -13,7 +13,6 @@ from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, neutral_configuration
 
 NAME = "explain"
-HELP = "why kappa is what it is: the modes of lambda_min and lambda_max, ranked sensitivities"
 #: Joints and bodies listed per mode in the text output.
 SHOWN = 3
 

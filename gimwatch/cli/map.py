@@ -17,7 +17,6 @@ from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import load_robot
 
 NAME = "map"
-HELP = "kappa and delta over a grid of two joints or along a trajectory: CSV and PNG heat map"
 #: Library parameters named otherwise on this command line (see `gimwatch.cli.parameter_options`).
 PARAMETER_OPTIONS = {"path": "--trajectory"}
 

@@ -13,7 +13,6 @@ from gimwatch.cli._format import table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 
 NAME = "metrics"
-HELP = "list the metrics gimwatch can compute and watch"
 #: ``--csv`` columns.
 CSV_COLUMNS = ("name", "needs_M", "vector", "description")
 

@@ -17,7 +17,6 @@ from gimwatch.cli._format import table
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 
 NAME = "robots"
-HELP = "list the robots gimwatch can load: name, nv, base, source"
 #: ``--csv`` columns.
 CSV_COLUMNS = ("name", "nv", "base", "source", "problem")
 

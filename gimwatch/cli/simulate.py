@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from gimwatch.cli._progress import ProgressBar
-from gimwatch.cli._signals import LATCH, fault_pause
+from gimwatch.cli._signals import LATCH
 from gimwatch.output.folders import Reservation
 from gimwatch.simulation.backends import BACKENDS
 from gimwatch.simulation.bundled_scenes import bundled_scenes
@@ -17,7 +17,6 @@ from gimwatch.simulation.scene import load_scene
 from gimwatch.simulation.simulate import Simulation
 
 NAME = "simulate"
-HELP = "simulate a scene (TOML) and watch the conditioning of M(q)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -81,14 +80,8 @@ def run(args: argparse.Namespace) -> int:
     with Reservation(output):  # refused (another writer, not ours) before the work
         with LATCH.deferred("hard"):
             bar = ProgressBar(f"{simulation.robot.name}")
-
-            def progress(fraction: float) -> object:
-                fault_pause("compute")
-                bar(fraction)
-                return None
-
             try:
-                trajectory = simulation.run(progress=LATCH.checking(progress))
+                trajectory = simulation.run(progress=LATCH.checking(bar))
             finally:
                 bar.close()
         with LATCH.deferred("soft"):  # a first signal lets the write complete

@@ -17,7 +17,6 @@ from gimwatch.stability.analysis import stability
 from gimwatch.stability.step_maps import INTEGRATORS
 
 NAME = "stability"
-HELP = "will it explode? the largest stable timestep under the servos and integrator, and why"
 MAX_RANDOM = 10_000
 
 

@@ -11,7 +11,6 @@ from gimwatch.stress.cases import CASES
 from gimwatch.stress.suite import METHODS, run_stress, stress_markdown
 
 NAME = "stress"
-HELP = "hard cases: is M SPD, DeNOC = CRBA, q̈ within C·kappa·eps of mpmath, simulations finite"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -16,7 +16,7 @@ from gimwatch.cli._format import (
     positive_int,
     table,
 )
-from gimwatch.cli._signals import LATCH, fault_pause
+from gimwatch.cli._signals import LATCH
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.output.folders import Reservation
 from gimwatch.simulation.scene_integrator import DEFAULT_MAX_STEPS
@@ -25,7 +25,6 @@ from gimwatch.survey.run import run_survey
 from gimwatch.survey.trajectory import TrajectorySettings
 
 NAME = "survey"
-HELP = "does the diagonal ratio track kappa? a report over many robots and configurations"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -172,7 +171,6 @@ def _survey(args: argparse.Namespace):
     ) as bar:
 
         def progress(finished: int, total: int) -> None:
-            fault_pause("compute")
             bar.total = total
             bar.update(finished - bar.n)
 

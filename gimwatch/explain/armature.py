@@ -34,6 +34,7 @@ import pinocchio as pin
 from scipy.optimize import linprog
 
 from gimwatch.errors import ConditioningError, InputError
+from gimwatch.joint_kinds import JointKind, joint_kind
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
@@ -66,7 +67,7 @@ def _check_inputs(robot: Robot, qs: np.ndarray, target: float, margin: float) ->
     if robot.floating:
         raise InputError("the robot", "fixed-base (no armature on a free-flyer)", robot.name)
     for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
-        if "FreeFlyer" in joint.shortname():  # a file's own free joint, as gimwatch's
+        if joint_kind(joint) is JointKind.FREE_FLYER:  # a file's own free joint, as gimwatch's
             raise InputError(
                 f"joint '{name}' of {robot.name}",
                 "a joint that can take armature, not a free joint (its 6 DoF move a "

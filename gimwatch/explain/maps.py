@@ -28,6 +28,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
+from gimwatch.joint_kinds import JointKind, joint_kind
 from gimwatch.metrics.analyze import choose_path, robot_for_path
 from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.metrics.dense_analysis import check_massless
@@ -251,7 +252,7 @@ def map_axes(
                 continue
             jname, i = model.names[j], joint.idx_q
             index[jname] = i
-            prismatic = "P" in joint.shortname().replace("JointModel", "")[:1]
+            prismatic = joint_kind(joint) is JointKind.PRISMATIC
             units[jname] = "m" if prismatic else "rad"
             lo, hi = model.lowerPositionLimit[i], model.upperPositionLimit[i]
             if not (is_real_limit(lo) and is_real_limit(hi)):

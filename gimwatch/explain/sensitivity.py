@@ -34,6 +34,7 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.explain.bodies import BodySplit, body_names, body_split, dof_joint_ranges
+from gimwatch.joint_kinds import length_velocities
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.model.robots import Robot, as_configuration
@@ -107,10 +108,10 @@ def parameter_table(robot: Robot) -> list[tuple[str, str, float, str]]:
         for axis, value in zip("xyz", model.jointPlacements[b + 1].translation, strict=True):
             rows.append((model.names[b + 1], f"offset_{axis}", float(value), "m"))
     for joint, start, width in dof_joint_ranges(robot):
-        prismatic = "P" in model.joints[model.getJointId(joint)].shortname()
+        sliding = length_velocities(model.joints[model.getJointId(joint)])
         for k in range(width):
             label = "armature" if width == 1 else f"armature[{k}]"
-            unit = "kg" if prismatic else "kg*m^2"
+            unit = "kg" if k < sliding else "kg*m^2"
             rows.append((joint, label, float(model.armature[start + k]), unit))
     return rows
 

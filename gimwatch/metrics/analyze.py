@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from gimwatch.errors import InputError
+from gimwatch.joint_kinds import length_velocities
 from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robots import (
@@ -80,15 +81,8 @@ def velocity_units(model) -> tuple[int, int]:
     """(coordinates in m, coordinates in rad) of a Pinocchio model's velocity vector."""
     lengths = angles = 0
     for joint in model.joints[1:]:
-        kind = joint.shortname()
-        if "FreeFlyer" in kind:
-            lengths, angles = lengths + 3, angles + 3
-        elif "Planar" in kind:
-            lengths, angles = lengths + 2, angles + 1
-        elif "Translation" in kind or "Prismatic" in kind or kind.startswith("JointModelP"):
-            lengths += joint.nv
-        else:  # revolute, continuous, spherical: rad
-            angles += joint.nv
+        in_metres = length_velocities(joint)
+        lengths, angles = lengths + in_metres, angles + joint.nv - in_metres
     return lengths, angles
 
 

@@ -22,7 +22,7 @@ from gimwatch.errors import InputError
 from gimwatch.metrics.dense_analysis import GimAnalysis, analysis_record, check_massless
 from gimwatch.metrics.registry import GimState
 from gimwatch.model.chains import ChainSpec
-from gimwatch.model.sampling import configuration_draws
+from gimwatch.model.sampling import uniform_in_limits
 from gimwatch.suggest import did_you_mean
 
 __all__ = ["LINEAR_METRICS", "analyze_linear", "chain_configurations"]
@@ -34,18 +34,15 @@ LINEAR_METRICS = ("kappa", "diagonal_ratio", "pivot_ratio_backward", "kappa_equi
 def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np.ndarray:
     """Random configurations of a generated chain, shape ``(count, n)``, within its limits.
 
-    Draws exactly what
-    [`random_configurations`][gimwatch.model.robots.random_configurations]
-    draws for the same chain and seed (one uniform number per joint and configuration, joint by
-    joint), without building a Pinocchio model.
+    The chain's limits (`ChainSpec.position_limits`, those its URDF writes) drawn by
+    `gimwatch.model.sampling.uniform_in_limits`, as
+    [`random_configurations`][gimwatch.model.robots.random_configurations] draws them for the
+    same chain and seed, without building a Pinocchio model.
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:
         raise InputError("count", "a positive integer", count)
-    lengths = np.asarray(spec.lengths_m)
-    prismatic = np.array([kind == "prismatic" for kind in spec.joint_types])
-    half_range = np.where(prismatic, lengths / 2, np.pi)
-    draws, _ = configuration_draws(seed, count, spec.n, 0)
-    return -half_range + 2 * half_range * draws
+    lower, upper = spec.position_limits()
+    return uniform_in_limits(lower, upper, count, seed)
 
 
 def analyze_linear(

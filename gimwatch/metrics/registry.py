@@ -34,6 +34,7 @@ import numpy as np
 from gimwatch.errors import ConditioningError
 from gimwatch.metrics import conditioning, equilibrated
 from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.registries import Registry
 
 __all__ = ["METRICS", "GimState", "Metric", "evaluate", "register"]
 
@@ -439,9 +440,9 @@ def _file_servos(robot, q):
 
 
 #: The registry: metric name -> class.
-METRICS: dict[str, type[Metric]] = {
-    cls.name: cls
-    for cls in (
+METRICS: Registry[type[Metric]] = Registry(
+    "metric",
+    (
         Kappa,
         KappaEquilibrated,
         KappaEquilibratedTracked,
@@ -455,16 +456,11 @@ METRICS: dict[str, type[Metric]] = {
         Eigenvalues,
         Diagonal,
         StabilityMargin,
-    )
-}
+    ),
+)
 
-
-def register(cls: type[Metric]) -> type[Metric]:
-    """Class decorator: add a metric to `METRICS` under its ``name``."""
-    if cls.name in METRICS:
-        raise ValueError(f"metric {cls.name!r} is already registered")
-    METRICS[cls.name] = cls
-    return cls
+register = METRICS.register
+"""Class decorator: add a metric to `METRICS` under its ``name``."""
 
 
 def evaluate(names, state: GimState, metrics: dict[str, Metric] | None = None) -> dict:

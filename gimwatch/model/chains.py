@@ -104,6 +104,13 @@ class ChainSpec:
         """Robot name used in the URDF, e.g. ``chain_4``."""
         return f"chain_{self.n}"
 
+    def position_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) of each joint, as the URDF writes them: ±π rad turning, ±l/2 m sliding."""
+        half = np.where(
+            np.array(self.joint_types) == "revolute", math.pi, np.asarray(self.lengths_m) / 2.0
+        )
+        return -half, half
+
 
 def _per_link(name: str, value: float | Sequence[float], n: int) -> tuple[float, ...]:
     values = np.atleast_1d(np.asarray(value, dtype=float))
@@ -192,6 +199,7 @@ def generate_chain_urdf(spec: ChainSpec) -> str:
     lines = ['<?xml version="1.0"?>', _header(spec).rstrip("\n"), f'<robot name="{spec.name}">']
     lines.append('  <link name="base_link"/>')
     parent, parent_length = "base_link", 0.0
+    lowers, uppers = spec.position_limits()
     for i in range(spec.n):
         m, l, r = spec.masses_kg[i], spec.lengths_m[i], spec.radii_m[i]
         ixx = m * r * r / 2.0
@@ -199,10 +207,7 @@ def generate_chain_urdf(spec: ChainSpec) -> str:
         link = f"link_{i + 1:0{width}d}"
         joint = f"joint_{i + 1:0{width}d}"
         ax = " ".join(_fmt(c) for c in _AXIS_VECTORS[spec.axes[i]])
-        if spec.joint_types[i] == "revolute":
-            lower, upper = -math.pi, math.pi
-        else:
-            lower, upper = -l / 2.0, l / 2.0
+        lower, upper = float(lowers[i]), float(uppers[i])
         visual_radius = r if r > 0 else l / 50.0
         lines += [
             f'  <joint name="{joint}" type="{spec.joint_types[i]}">',

@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import GimwatchError
+from gimwatch.joint_kinds import JointKind, joint_kind
 from gimwatch.model.mjcf_coordinates import q_from_qpos
 from gimwatch.model.robots import Robot
 
@@ -59,16 +60,18 @@ class ConfigurationError(GimwatchError, ValueError):
 
 def _kind(joint: pin.JointModel) -> str:
     """'one' (revolute, prismatic), 'continuous', 'planar', 'spherical' or 'free-flyer'."""
-    name = joint.shortname()
-    if "FreeFlyer" in name:
-        return "free-flyer"
-    if "Spherical" in name:
-        return "spherical"
-    if "Planar" in name:
-        return "planar"
-    if joint.nq == 2 and joint.nv == 1:
-        return "continuous"
+    kind = joint_kind(joint)
+    if kind in _KIND_WORDS:
+        return _KIND_WORDS[kind]
     return "one" if joint.nq == 1 else "other"
+
+
+_KIND_WORDS = {
+    JointKind.FREE_FLYER: "free-flyer",
+    JointKind.SPHERICAL: "spherical",  # a quaternion (a ZYX ball's 3 angles are "other")
+    JointKind.PLANAR: "planar",
+    JointKind.CONTINUOUS: "continuous",
+}
 
 
 def _user_width(joint: pin.JointModel) -> int:

@@ -28,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import RobotError
+from gimwatch.joint_kinds import JointKind, joint_axis, joint_kind, joint_type_name
 
 __all__ = ["InstantaneousURDF", "instantaneous_urdf", "tree_arrays", "urdf_of_model"]
 
@@ -75,30 +76,17 @@ def _origin(placement: pin.SE3) -> str:
     return f'<origin xyz="{_xyz(placement.translation)}" rpy="{_xyz(rpy)}"/>'
 
 
-# Pinocchio's one-DoF joints and their URDF types (a continuous joint: RUB, nq = 2).
-_ONE_DOF = {
-    **{f"JointModelR{a}": "revolute" for a in "XYZ"},
-    "JointModelRevoluteUnaligned": "revolute",
-    **{f"JointModelRUB{a}": "continuous" for a in "XYZ"},
-    "JointModelRevoluteUnboundedUnaligned": "continuous",
-    **{f"JointModelP{a}": "prismatic" for a in "XYZ"},
-    "JointModelPrismaticUnaligned": "prismatic",
-}
-
-
-def _joint_axis(kind: str, joint) -> np.ndarray:
-    if kind[-1] in "XYZ" and "Unaligned" not in kind:
-        return np.eye(3)["XYZ".index(kind[-1])]
-    return np.array(joint.extract().axis, dtype=float)
+# The one-DoF joints DeNOC reads; a kind's value is its URDF type (a continuous joint: nq = 2)
+_ONE_DOF = frozenset({JointKind.REVOLUTE, JointKind.CONTINUOUS, JointKind.PRISMATIC})
 
 
 def _one_dof_joint(model: pin.Model, k: int, parent: str, child: str) -> str:
-    joint, kind = model.joints[k], model.joints[k].shortname()
-    urdf_kind = _ONE_DOF[kind]
+    joint = model.joints[k]
+    urdf_kind = joint_kind(joint).value
     return (
         f'<joint name="{model.names[k]}" type="{urdf_kind}">'
         f'<parent link="{parent}"/><child link="{child}"/>{_origin(model.jointPlacements[k])}'
-        f'<axis xyz="{_xyz(_joint_axis(kind, joint))}"/>{_limit(model, joint, urdf_kind)}</joint>'
+        f'<axis xyz="{_xyz(joint_axis(joint))}"/>{_limit(model, joint, urdf_kind)}</joint>'
     )
 
 
@@ -128,19 +116,19 @@ def tree_arrays(model: pin.Model, *, source: str) -> dict:
     n = model.njoints
     kind, axis = np.zeros(n, dtype=np.intp), np.zeros((n, 3))
     for k in range(1, n):
-        joint, shortname = model.joints[k], model.joints[k].shortname()
-        if "FreeFlyer" in shortname:
+        joint, joint_type = model.joints[k], joint_kind(model.joints[k])
+        if joint_type is JointKind.FREE_FLYER:
             kind[k] = _FREE_KIND
-        elif shortname == "JointModelSpherical":
+        elif joint_type is JointKind.SPHERICAL:
             kind[k] = _BALL_KIND
-        elif shortname in _ONE_DOF:
-            kind[k] = _KIND[_ONE_DOF[shortname]]
-            axis[k] = _joint_axis(shortname, joint)
+        elif joint_type in _ONE_DOF:
+            kind[k] = _KIND[joint_type.value]
+            axis[k] = joint_axis(joint)
             axis[k] /= np.linalg.norm(axis[k])
         else:
             raise RobotError(
                 source,
-                f"joint {model.names[k]!r} ({shortname.removeprefix('JointModel')}) has no "
+                f"joint {model.names[k]!r} ({joint_type_name(joint)}) has no "
                 "O(n) DeNOC recursion (revolute, prismatic, ball and free joints only)",
             )
     return {
@@ -167,10 +155,10 @@ def urdf_of_model(model: pin.Model) -> str:
     Each joint's placement becomes its ``<origin>``, each joint's inertia its link's
     ``<inertial>`` (about the centre of mass, in the joint frame).
     """
-    kinds = [joint.shortname() for joint in model.joints[1:]]
-    free = [k for k, kind in enumerate(kinds) if "FreeFlyer" in kind]
+    kinds = [joint_kind(joint) for joint in model.joints[1:]]
+    free = [k for k, kind in enumerate(kinds) if kind is JointKind.FREE_FLYER]
     roots = [k for k in range(1, model.njoints) if model.parents[k] == 0]
-    if any(kind not in _ONE_DOF for kind in kinds if "FreeFlyer" not in kind):
+    if any(kind not in _ONE_DOF for kind in kinds if kind is not JointKind.FREE_FLYER):
         return ""  # a ball, planar, composite or mimic joint: no URDF joint DeNOC reads
     if free not in ([], [0]):
         return ""
@@ -220,18 +208,18 @@ def instantaneous_urdf(model: pin.Model, q: np.ndarray) -> InstantaneousURDF:
     order: list[str] = []
     q_out: list[float] = []
     for k in range(1, model.njoints):
-        joint, kind, name = model.joints[k], model.joints[k].shortname(), model.names[k]
+        joint, kind, name = model.joints[k], joint_kind(model.joints[k]), model.names[k]
         link = f"link_{k}"
         names[k] = link
         parent = names[model.parents[k]]
-        if "Spherical" not in kind and "FreeFlyer" not in kind:
+        if kind not in (JointKind.SPHERICAL, JointKind.FREE_FLYER):
             lines.append(f'<link name="{link}">{_inertial(model, k)}</link>')
             lines.append(_one_dof_joint(model, k, parent, link))
             order.append(name)
             q_out.extend(q[joint.idx_q : joint.idx_q + joint.nq])  # (cos θ, sin θ) if continuous
             continue
         coordinates = q[joint.idx_q : joint.idx_q + joint.nq]
-        if "FreeFlyer" in kind:
+        if kind is JointKind.FREE_FLYER:
             motion = pin.XYZQUATToSE3(coordinates)
             parts = _FREE_PARTS
         else:

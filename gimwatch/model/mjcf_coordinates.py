@@ -26,16 +26,18 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from gimwatch.joint_kinds import JointKind, joint_kind
+
 __all__ = ["q_from_qpos", "qpos_from_q", "velocity_map"]
 
 
 def _quaternion_blocks(model: pin.Model):
     """(idx_q, nq) of each quaternion block (free flyer: after the position; ball)."""
     for joint in model.joints[1:]:
-        kind = joint.shortname()
-        if "FreeFlyer" in kind:
+        kind = joint_kind(joint)
+        if kind is JointKind.FREE_FLYER:
             yield joint.idx_q + 3
-        elif "Spherical" in kind:
+        elif kind is JointKind.SPHERICAL:
             yield joint.idx_q
 
 
@@ -59,7 +61,7 @@ def velocity_map(model: pin.Model, q) -> np.ndarray:
     """T(q) with qvel = T v: identity except a free joint's linear block, its rotation R."""
     T = np.eye(model.nv)
     for joint in model.joints[1:]:
-        if "FreeFlyer" in joint.shortname():
+        if joint_kind(joint) is JointKind.FREE_FLYER:
             x, y, z, w = q[joint.idx_q + 3 : joint.idx_q + 7]
             rotation = pin.Quaternion(w, x, y, z).normalized().matrix()
             T[joint.idx_v : joint.idx_v + 3, joint.idx_v : joint.idx_v + 3] = rotation

@@ -33,6 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import RobotError
+from gimwatch.joint_kinds import JointKind, joint_kind, joint_type_name
 from gimwatch.model.captured_output import captured_c_output
 from gimwatch.model.mjcf_compiled import import_mujoco
 from gimwatch.model.robots import Robot
@@ -127,24 +128,26 @@ def _joint_maps(robot: Robot, mj_model, q: np.ndarray, mj_q: np.ndarray, T: np.n
         if j < 0:
             raise RobotError(robot.spec, f"MuJoCo has no joint named '{name}'")
         qa, va = int(mj_model.jnt_qposadr[j]), int(mj_model.jnt_dofadr[j])
-        iq, iv, kind = joint.idx_q, joint.idx_v, joint.shortname()
-        if "FreeFlyer" in kind:
+        iq, iv, kind = joint.idx_q, joint.idx_v, joint_kind(joint)
+        if kind is JointKind.FREE_FLYER:
             mj_q[qa : qa + 3] = q[iq : iq + 3]
             mj_q[qa + 3 : qa + 7] = np.roll(q[iq + 3 : iq + 7], 1)
             rotation = pin.Quaternion(q[iq + 6], *q[iq + 3 : iq + 6]).normalized().matrix()
             T[va : va + 3, iv : iv + 3] = rotation
             T[va + 3 : va + 6, iv + 3 : iv + 6] = np.eye(3)
-        elif "Spherical" in kind:
+        elif kind is JointKind.SPHERICAL:
             mj_q[qa : qa + 4] = np.roll(q[iq : iq + 4], 1)
             T[va : va + 3, iv : iv + 3] = np.eye(3)
-        elif joint.nq == 2 and joint.nv == 1:  # continuous: (cos, sin)
+        elif kind is JointKind.CONTINUOUS:  # (cos, sin)
             mj_q[qa] = np.arctan2(q[iq + 1], q[iq])
             T[va, iv] = 1.0
-        elif joint.nq == 1 and joint.nv == 1:
+        elif kind in (JointKind.REVOLUTE, JointKind.PRISMATIC):
             mj_q[qa] = q[iq]
             T[va, iv] = 1.0
         else:
-            raise RobotError(robot.spec, f"joint '{name}' ({kind}) has no MuJoCo counterpart")
+            raise RobotError(
+                robot.spec, f"joint '{name}' ({joint_type_name(joint)}) has no MuJoCo counterpart"
+            )
 
 
 def mass_matrix(mj_model, mj_q: np.ndarray, *, spec: str = "<mujoco>") -> np.ndarray:

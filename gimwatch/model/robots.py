@@ -33,6 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import ExampleRobotWarning, InputError, RobotError, URDFError
+from gimwatch.joint_kinds import JointKind, joint_kind
 from gimwatch.model.captured_output import captured_c_output
 from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
 from gimwatch.model.example_robots import (
@@ -82,7 +83,7 @@ MAX_TREE_DEPTH = 2000
 
 def _own_free_root(model: pin.Model) -> bool:
     """Joint 1 is a free-flyer and every other joint hangs below it (one floating tree)."""
-    if model.njoints < 2 or "FreeFlyer" not in model.joints[1].shortname():
+    if model.njoints < 2 or joint_kind(model.joints[1]) is not JointKind.FREE_FLYER:
         return False
     return all(model.parents[k] != 0 for k in range(2, model.njoints))
 

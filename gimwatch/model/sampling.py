@@ -16,6 +16,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
+from gimwatch.joint_kinds import joint_kind, length_positions
 
 __all__ = [
     "DEFAULT_MAX_RANDOM_WORK",
@@ -55,10 +56,7 @@ class Robot(Protocol):
 
 def unit_block_size(joint: pin.JointModel) -> int:
     """Size of the unit-norm part of a joint's q (4 for quaternions, 2 for unit complex)."""
-    if joint.nq == joint.nv:
-        return 0
-    kind = joint.shortname()
-    return 4 if ("Spherical" in kind or "FreeFlyer" in kind) else 2
+    return joint_kind(joint).unit_block
 
 
 #: A joint limit this large (or infinite) is a placeholder for "unlimited" (URDF writers put
@@ -145,11 +143,7 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
         start, stop = joint.idx_q, joint.idx_q + joint.nq
         unit = unit_block_size(joint)
         box = slice(start, stop - unit)
-        default = (
-            _DEFAULT_ANGLE_RAD
-            if joint.shortname().startswith("JointModelR")
-            else (_DEFAULT_TRANSLATION_M)
-        )
+        default = _DEFAULT_TRANSLATION_M if length_positions(joint) else _DEFAULT_ANGLE_RAD
         boxes += range(start, stop - unit)
         lows.append(np.where(is_real_limit(lower[box]), lower[box], -default))
         highs.append(np.where(is_real_limit(upper[box]), upper[box], default))
@@ -159,8 +153,7 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     uniform, normal = configuration_draws(seed, count, len(boxes), width_normal)
     qs = np.empty((count, model.nq))
     if boxes:
-        lo, hi = np.concatenate(lows), np.concatenate(highs)
-        qs[:, boxes] = lo + (hi - lo) * uniform
+        qs[:, boxes] = in_limits(np.concatenate(lows), np.concatenate(highs), uniform)
     column = 0
     for block in units:
         width = block.stop - block.start
@@ -168,6 +161,26 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
         qs[:, block] = drawn / np.linalg.norm(drawn, axis=1, keepdims=True)
         column += width
     return qs
+
+
+def uniform_in_limits(
+    lower: npt.ArrayLike, upper: npt.ArrayLike, count: int, seed: int | None
+) -> np.ndarray:
+    """``count`` configurations uniform in the box [lower, upper], shape ``(count, width)``.
+
+    The boxed coordinates of `random_configurations`, and the whole of a robot without unit
+    blocks (a generated chain, from its `ChainSpec.position_limits`): row k depends only on
+    (seed, k).
+    """
+    lo = np.asarray(lower, dtype=float)
+    uniform, _ = configuration_draws(seed, count, lo.size, 0)
+    return in_limits(lo, upper, uniform)
+
+
+def in_limits(lower: npt.ArrayLike, upper: npt.ArrayLike, uniform: np.ndarray) -> np.ndarray:
+    """Uniforms in [0, 1) mapped to [lower, upper), coordinate by coordinate."""
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    return lo + (hi - lo) * uniform
 
 
 def configuration_draws(

@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from gimwatch.joint_kinds import JointKind, joint_kind, length_positions
+
 __all__ = [
     "MAX_LINES",
     "animate_chain",
@@ -193,11 +195,11 @@ def joint_coordinate_units(model) -> tuple[list[str], list[str]]:
     """
     names, units = [], []
     for joint, name in zip(model.joints[1:], model.names[1:], strict=True):
-        kind = joint.shortname()
+        kind = joint_kind(joint)
         if joint.nq == 1:
             names.append(name)
-            units.append("m" if "Prismatic" in kind or kind.startswith("JointModelP") else "rad")
-        elif "FreeFlyer" in kind:
+            units.append("m" if length_positions(joint) else "rad")
+        elif kind is JointKind.FREE_FLYER:
             names += [f"{name}.{c}" for c in ("x", "y", "z", "qx", "qy", "qz", "qw")]
             units += ["m"] * 3 + ["-"] * 4
         else:

@@ -27,7 +27,7 @@ import os
 import shutil
 import stat
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from pathlib import Path
 from types import TracebackType
 
@@ -49,23 +49,11 @@ __all__ = [
     "ResultsFolder",
     "check_folder_target",
     "is_results_folder",
-    "phase_hook",
     "write_marker",
 ]
 
 #: The file that makes a folder a gimwatch results folder.
 MARKER = ".gimwatch-results.json"
-
-
-#: Called with the name of each phase of a write (``"write"``: the files are in the staging
-#: folder; ``"swap"``: the new folder is in place, the previous one not yet deleted). The
-#: command line sets it for its fault tests (``GIMWATCH_FAULT_PAUSE``).
-phase_hook: Callable[[str], None] | None = None
-
-
-def _phase(name: str) -> None:
-    if phase_hook is not None:
-        phase_hook(name)
 
 
 def _problem(exc: OSError) -> str:
@@ -112,45 +100,56 @@ def check_folder_target(path: str | Path) -> Path:
             empty nor a gimwatch results folder.
     """
     target = Path(os.path.realpath(os.path.abspath(path)))
-    try:
-        mode = os.lstat(target).st_mode
-    except FileNotFoundError:
+    mode = _target_mode(target, str(path))
+    if mode is None:
         return target
+    _check_is_folder(mode, str(path))
+    if is_results_folder(target):
+        if not mode & stat.S_IWUSR:
+            raise OutputError(
+                str(path),
+                f"is a read-only results folder (mode {stat.S_IMODE(mode):04o}): its owner "
+                "protected it; nothing was written: make it writable or give another folder",
+            )
+        return target
+    try:
+        empty = not any(os.scandir(target))
+    except OSError as exc:
+        raise OutputError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
+    if not empty:
+        raise OutputError(
+            str(path),
+            f"is a folder that is not empty and not a gimwatch results folder (no {MARKER}); "
+            "nothing was written: give a new or empty folder",
+        )
+    return target
+
+
+def _target_mode(target: Path, shown: str) -> int | None:
+    """``lstat``'s mode of a results folder's target, None if there is nothing there yet."""
+    try:
+        return os.lstat(target).st_mode
+    except FileNotFoundError:
+        return None
     except NotADirectoryError as exc:  # a file where a parent folder should be
         for parent in target.parents:
             if parent.exists() and not parent.is_dir():
                 raise OutputError(
                     str(parent), "is a file, not a folder; give a folder name"
                 ) from exc
-        raise OutputError(str(path), _problem(exc)) from exc
+        raise OutputError(shown, _problem(exc)) from exc
     except OSError as exc:
-        raise OutputError(str(path), _problem(exc)) from exc
+        raise OutputError(shown, _problem(exc)) from exc
+
+
+def _check_is_folder(mode: int, shown: str) -> None:
+    """Refuse a target that exists and is not a folder (a dangling link, a file, a FIFO...)."""
     if stat.S_ISLNK(mode):
-        raise OutputError(str(path), "is a symbolic link that cannot be resolved (a loop?)")
+        raise OutputError(shown, "is a symbolic link that cannot be resolved (a loop?)")
     if stat.S_ISREG(mode):
-        raise OutputError(str(path), "is a file, not a folder; give a folder name")
+        raise OutputError(shown, "is a file, not a folder; give a folder name")
     if not stat.S_ISDIR(mode):
-        raise OutputError(
-            str(path), f"is a {describe_kind(mode)}, not a folder; give a folder name"
-        )
-    if is_results_folder(target) and not mode & stat.S_IWUSR:
-        raise OutputError(
-            str(path),
-            f"is a read-only results folder (mode {stat.S_IMODE(mode):04o}): its owner "
-            "protected it; nothing was written: make it writable or give another folder",
-        )
-    if not is_results_folder(target):
-        try:
-            empty = not any(os.scandir(target))
-        except OSError as exc:
-            raise OutputError(str(path), f"cannot be read ({exc.strerror or exc})") from exc
-        if not empty:
-            raise OutputError(
-                str(path),
-                f"is a folder that is not empty and not a gimwatch results folder (no {MARKER}); "
-                "nothing was written: give a new or empty folder",
-            )
-    return target
+        raise OutputError(shown, f"is a {describe_kind(mode)}, not a folder; give a folder name")
 
 
 #: Folders this process holds: target -> [lock, holders, parents created for it].
@@ -296,7 +295,6 @@ class ResultsFolder(Reservation):
         """
         if self.staging is None:
             raise RuntimeError("commit() outside the with block")
-        _phase("write")
         try:
             os.chmod(self.staging, 0o777 & ~_umask())  # mkdtemp makes 0700 folders
             # the record stays until the swap is done (swap): a writer killed before then
@@ -318,7 +316,6 @@ class ResultsFolder(Reservation):
                 check_folder_target(self.target)
                 swap(self.staging, self.target)
                 self.committed = True
-                _phase("swap")
                 _remove_previous(self.staging)
         except OSError as exc:
             raise OutputError(self.shown, _problem(exc)) from exc

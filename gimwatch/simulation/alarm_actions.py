@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar, Protocol
 
+from gimwatch.registries import Registry
 from gimwatch.simulation.backends import make_backend
 from gimwatch.simulation.integrators import INTEGRATORS
 from gimwatch.watch.watch import Alarm
@@ -80,15 +81,11 @@ class AlarmAction:
 
 
 #: The registry: scene ``on_alarm`` name -> class.
-ALARM_ACTIONS: dict[str, type[AlarmAction]] = {}
+ALARM_ACTIONS: Registry[type[AlarmAction]] = Registry("on_alarm action")
 
 
-def register(cls: type[AlarmAction]) -> type[AlarmAction]:
-    """Class decorator: add an action to `ALARM_ACTIONS` under its ``name``."""
-    if cls.name in ALARM_ACTIONS:
-        raise ValueError(f"on_alarm action {cls.name!r} is already registered")
-    ALARM_ACTIONS[cls.name] = cls
-    return cls
+register = ALARM_ACTIONS.register
+"""Class decorator: add an action to `ALARM_ACTIONS` under its ``name``."""
 
 
 @register

@@ -31,6 +31,7 @@ import pinocchio as pin
 from gimwatch.errors import SceneError
 from gimwatch.model.configuration import coordinate_kinds
 from gimwatch.model.robots import Robot
+from gimwatch.registries import Registry
 from gimwatch.simulation.joint_values import joint_vector
 from gimwatch.simulation.parameters import Parameter
 from gimwatch.simulation.torque_laws import TORQUE_LAWS, CallableLaw
@@ -88,15 +89,11 @@ class Effect:
 
 
 #: The registry: scene effect name -> class.
-EFFECTS: dict[str, type[Effect]] = {}
+EFFECTS: Registry[type[Effect]] = Registry("effect")
 
 
-def register(cls: type[Effect]) -> type[Effect]:
-    """Class decorator: add an effect to `EFFECTS` under its ``name``."""
-    if cls.name in EFFECTS:
-        raise ValueError(f"effect {cls.name!r} is already registered")
-    EFFECTS[cls.name] = cls
-    return cls
+register = EFFECTS.register
+"""Class decorator: add an effect to `EFFECTS` under its ``name``."""
 
 
 @register

@@ -32,6 +32,7 @@ from typing import ClassVar, Protocol
 import numpy as np
 import scipy.integrate
 
+from gimwatch.registries import Registry
 from gimwatch.simulation.local_coordinates import LocalChart
 
 __all__ = [
@@ -131,15 +132,11 @@ class Integrator:
 
 
 #: The registry: scene method name -> class.
-INTEGRATORS: dict[str, type[Integrator]] = {}
+INTEGRATORS: Registry[type[Integrator]] = Registry("integrator")
 
 
-def register(cls: type[Integrator]) -> type[Integrator]:
-    """Class decorator: add an integrator to `INTEGRATORS` under its ``name``."""
-    if cls.name in INTEGRATORS:
-        raise ValueError(f"integrator {cls.name!r} is already registered")
-    INTEGRATORS[cls.name] = cls
-    return cls
+register = INTEGRATORS.register
+"""Class decorator: add an integrator to `INTEGRATORS` under its ``name``."""
 
 
 # -- adaptive (SciPy) -------------------------------------------------------------------

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from gimwatch.errors import ConditioningError, GimwatchError, InputError, SceneError
+from gimwatch.joint_kinds import length_velocities
 from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import (
@@ -78,8 +79,8 @@ def _check_moving_mass(scene, robot: Robot) -> None:
     diagonal = []
     for k in range(1, model.njoints):
         joint = model.joints[k]
-        prismatic = joint.shortname().startswith(("JointModelP", "JointModelTranslation"))
-        moves = mass[k] > 0 if prismatic else (mass[k] > 0 or rotational[k] > 0)
+        sliding = length_velocities(joint) == joint.nv  # translates only: mass alone moves
+        moves = mass[k] > 0 if sliding else (mass[k] > 0 or rotational[k] > 0)
         diagonal += [1.0 if moves else 0.0] * joint.nv
     try:
         check_massless(np.array(diagonal), robot.dof_names, name=robot.name, source=robot.source)

@@ -29,6 +29,7 @@ import pinocchio as pin
 
 from gimwatch.errors import GimwatchError
 from gimwatch.model.robots import Robot
+from gimwatch.registries import Registry
 from gimwatch.simulation.joint_values import joint_vector
 from gimwatch.simulation.parameters import Parameter
 
@@ -80,15 +81,11 @@ class TorqueLaw:
 
 
 #: The registry: scene law name -> class.
-TORQUE_LAWS: dict[str, type[TorqueLaw]] = {}
+TORQUE_LAWS: Registry[type[TorqueLaw]] = Registry("torque law")
 
 
-def register(cls: type[TorqueLaw]) -> type[TorqueLaw]:
-    """Class decorator: add a torque law to `TORQUE_LAWS` under its ``name``."""
-    if cls.name in TORQUE_LAWS:
-        raise ValueError(f"torque law {cls.name!r} is already registered")
-    TORQUE_LAWS[cls.name] = cls
-    return cls
+register = TORQUE_LAWS.register
+"""Class decorator: add a torque law to `TORQUE_LAWS` under its ``name``."""
 
 
 _VALUE = Parameter("value", "joint", doc="constant torque τ₀ (N·m or N), default 0")

@@ -21,7 +21,6 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import ConditioningError
-from gimwatch.metrics.conditioning import ldlt_pivots
 from gimwatch.stability.servos import Servos
 
 __all__ = ["LinearSystem", "linearise"]
@@ -78,7 +77,14 @@ def _check_massive(model: pin.Model, mass: np.ndarray, source: str) -> None:
             f"{source}: M(q) of {model.name} is singular: {len(massless)} coordinate(s) move "
             f"no mass ({', '.join(massless)}); give the links they move an <inertial>"
         )
-    ldlt_pivots(mass)  # ConditioningError unless M(q) is positive definite
+    if not np.all(np.isfinite(mass)):
+        raise ConditioningError(f"{source}: M(q) of {model.name} is not finite")
+    try:  # M(q) from CRBA is symmetric; NumPy's Cholesky (potrf) fails unless it is SPD
+        np.linalg.cholesky(mass)
+    except np.linalg.LinAlgError as exc:
+        raise ConditioningError(
+            f"{source}: M(q) of {model.name} is not positive definite ({exc})"
+        ) from exc
 
 
 def linearise(

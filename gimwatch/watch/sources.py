@@ -35,6 +35,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from gimwatch.errors import InputError
+from gimwatch.joint_kinds import JointKind, joint_kind, joint_type_name
 from gimwatch.metrics.conditioning import check_gim
 from gimwatch.model.denoc_input import urdf_of_model
 from gimwatch.model.mjcf_compiled import import_mujoco
@@ -87,7 +88,7 @@ def robot_from_model(model: pin.Model, *, name: str | None = None) -> Robot:
         raise InputError("model", "a pinocchio.Model", type_name(model))
     if model.nv < 1:
         raise InputError("model", "a pinocchio.Model with at least one joint", f"nv = {model.nv}")
-    floating = model.njoints > 1 and "FreeFlyer" in model.joints[1].shortname()
+    floating = model.njoints > 1 and joint_kind(model.joints[1]) is JointKind.FREE_FLYER
     label = name or model.name or "pinocchio_model"
     return Robot(
         name=label,
@@ -255,8 +256,8 @@ class MujocoSource:
         order = np.full(robot.nv, -1, dtype=np.intp)
         for joint, name in zip(robot.model.joints[1:], robot.model.names[1:], strict=True):
             j = joint_id(model, name)
-            kind = joint.shortname()
-            if j < 0 and "FreeFlyer" in kind and free.size == 1:
+            kind = joint_kind(joint)
+            if j < 0 and kind is JointKind.FREE_FLYER and free.size == 1:
                 j = int(free[0])  # MuJoCo's free joint often has another name
             if j < 0:
                 raise InputError(
@@ -267,7 +268,8 @@ class MujocoSource:
                 found = mujoco.mjtJoint(int(model.jnt_type[j])).name.removeprefix("mjJNT_")
                 raise InputError(
                     f"joint '{name}'",
-                    f"a MuJoCo {_TYPE_NAMES[expected]} joint like the robot's ({kind})",
+                    f"a MuJoCo {_TYPE_NAMES[expected]} joint like the robot's "
+                    f"({joint_type_name(joint)})",
                     found.lower(),
                 )
             width = 6 if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE else None
@@ -276,7 +278,7 @@ class MujocoSource:
                 raise InputError(f"joint '{name}'", f"{joint.nv} dof in MuJoCo too", dofs)
             start = int(model.jnt_dofadr[j])
             order[joint.idx_v : joint.idx_v + joint.nv] = np.arange(start, start + dofs)
-            if "FreeFlyer" in kind:
+            if kind is JointKind.FREE_FLYER:
                 self._free.append((joint.idx_v, int(model.jnt_qposadr[j]) + 3))
         if np.any(order < 0) or np.unique(order).size != order.size:
             raise InputError("robot", "a one-to-one joint match with the MuJoCo model", "none")
@@ -363,14 +365,17 @@ def _rotation(quaternion_wxyz: np.ndarray) -> np.ndarray:
 _TYPE_NAMES = {0: "free", 1: "ball", 2: "slide", 3: "hinge"}
 
 
-def _mujoco_joint_type(kind: str) -> int | None:
-    """MuJoCo's joint type matching a Pinocchio joint's shortname, None if none is known."""
-    if "FreeFlyer" in kind:
-        return 0
-    if "Spherical" in kind:
-        return 1
-    if "Prismatic" in kind or kind in ("JointModelPX", "JointModelPY", "JointModelPZ"):
-        return 2
-    if "Revolute" in kind or kind.removeprefix("JointModelR").removeprefix("UB") in ("X", "Y", "Z"):
-        return 3
-    return None
+def _mujoco_joint_type(kind: JointKind) -> int | None:
+    """MuJoCo's joint type (mjtJoint) matching a Pinocchio joint's kind, None if none is known."""
+    return _MUJOCO_JOINT_TYPES.get(kind)
+
+
+# mjJNT_FREE, _BALL, _SLIDE, _HINGE
+_MUJOCO_JOINT_TYPES = {
+    JointKind.FREE_FLYER: 0,
+    JointKind.SPHERICAL: 1,
+    JointKind.SPHERICAL_ZYX: 1,
+    JointKind.PRISMATIC: 2,
+    JointKind.REVOLUTE: 3,
+    JointKind.CONTINUOUS: 3,
+}
