@@ -1,4 +1,4 @@
-"""Section ``tracker``: κ tracked at O(n) per sample, against CRBA + eig and the old Lanczos.
+"""Section ``tracker``: κ tracked at O(n) per sample, against CRBA + eig and ARPACK.
 
 Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
 
@@ -13,10 +13,12 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   the plain dense κ = eig(M) has lost its digits — its own error is listed). Methods: the
   tracker ([`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on
   DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's
-  previous matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the
-  previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
-  means nothing (eps·κ ≈ 1e-3): the tracker is compared with cold-start Lanczos at 1e-10 on
-  DeNOC's operators ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]).
+  former matrix-free metric, kept as a bench peer: ARPACK at 1e-3 on Pinocchio's RNEA/ABA,
+  warm-started from the previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it
+  would need ~45 GB) and dense κ means nothing (eps·κ ≈ 1e-3): the tracker is compared with
+  cold-start plain Lanczos at 1e-10 on DeNOC's operators
+  ([`plain_lanczos_kappa`][gimwatch.bench.krylov_peers.plain_lanczos_kappa], the bench peer of
+  the O(n) path's former κ).
 * ``tracker_claim`` — along the paper's own trajectories (the bundled ``chain_{4,10,20}``
   scenes): δ, αδ (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch
   metric: median cost of one [`sample`][gimwatch.watch.watch.Watch.sample] and the median /
@@ -37,11 +39,11 @@ import scipy.linalg
 from threadpoolctl import threadpool_limits
 
 from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench.krylov_peers import kappa_matrix_free, plain_lanczos_kappa
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits
-from gimwatch.denoc import DenocModel, extreme_eigenvalues
+from gimwatch.denoc import DenocModel
 from gimwatch.metrics.conditioning import extreme_ratio
-from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.metrics.tracker import KappaTracker
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import load_robot
@@ -176,10 +178,10 @@ def _tracker_rows(context: BenchContext, table: Table, n: int) -> None:
     rows = []
     if data is None:
         lanczos, lanczos_us = _per_sample(
-            lambda q: extreme_eigenvalues(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]
+            lambda q: plain_lanczos_kappa(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]
         )
-        reference = np.array([r.kappa for r in lanczos])
-        cold_products = float(np.median([r.products for r in lanczos]))
+        reference = np.array([kappa for kappa, _ in lanczos])
+        cold_products = float(np.median([products for _, products in lanczos]))
         diff = float(np.max(np.abs(kappa[:3] - reference) / reference))
         rows.append(
             dict(

@@ -14,14 +14,17 @@ root (the world): many free bodies, or robots side by side.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import logging
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from gimwatch.errors import URDFError
+from gimwatch.errors import InputError, URDFError
 from gimwatch.model.urdf_text import check_urdf
 
 __all__ = [
@@ -204,40 +207,41 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
             stack.append((joint.child, len(parent) - 1, np.eye(4)))
     merged = [_merge(p) for p in parts]
     return body_tree(
-        source=source,
-        floating=floating,
-        joint_names=names,
-        parent=parent,
-        kind=kind,
-        placement_rotation=rotation,
-        placement_translation=translation,
-        axis=axis,
-        mass=[m for m, _, _ in merged],
-        com=[c for _, c, _ in merged],
-        inertia=[i for _, _, i in merged],
+        dict(
+            source=source,
+            floating=floating,
+            joint_names=names,
+            parent=parent,
+            kind=kind,
+            placement_rotation=rotation,
+            placement_translation=translation,
+            axis=axis,
+            mass=[m for m, _, _ in merged],
+            com=[c for _, c, _ in merged],
+            inertia=[i for _, _, i in merged],
+        )
     )
 
 
-def body_tree(
-    *,
-    source: str,
-    floating: bool,
-    joint_names,
-    parent,
-    kind,
-    placement_rotation,
-    placement_translation,
-    axis,
-    mass,
-    com,
-    inertia,
-) -> BodyTree:
+def body_tree(fields: Mapping[str, Any]) -> BodyTree:
     """A [`BodyTree`][gimwatch.denoc.BodyTree] from per-body arrays, parents numbered first.
 
-    Fields as in `BodyTree` (``levels`` is computed). Body 0 is the root; with ``floating``
-    False it is the world (its inertia never enters M) and any of its children may be the
-    root of a tree of its own, on a free joint (`FREE_KIND`) or not.
+    ``fields`` maps each field of `BodyTree` but ``levels`` (computed here) to its value:
+    ``source``, ``floating``, ``joint_names``, ``parent``, ``kind``, ``placement_rotation``,
+    ``placement_translation``, ``axis``, ``mass``, ``com``, ``inertia``. Body 0 is the root;
+    with ``floating`` False it is the world (its inertia never enters M) and any of its
+    children may be the root of a tree of its own, on a free joint (`FREE_KIND`) or not.
+
+    Raises:
+        InputError: A field is missing or unknown.
     """
+    wanted = [f.name for f in dataclasses.fields(BodyTree) if f.name != "levels"]
+    if sorted(fields) != sorted(wanted):
+        missing, unknown = sorted(set(wanted) - set(fields)), sorted(set(fields) - set(wanted))
+        raise InputError(
+            "body_tree fields", f"exactly {wanted}", f"missing {missing}, unknown {unknown}"
+        )
+    parent = fields["parent"]
     parent_arr = np.array(parent, dtype=np.intp)
     depth = np.zeros(len(parent_arr), dtype=np.intp)
     for i in range(1, len(parent_arr)):  # parents are numbered before their children
@@ -245,16 +249,16 @@ def body_tree(
     order = np.argsort(depth, kind="stable")
     levels = tuple(np.split(order, np.flatnonzero(np.diff(depth[order])) + 1)[1:])
     return BodyTree(
-        source=source,
-        floating=floating,
-        joint_names=tuple(joint_names),
+        source=fields["source"],
+        floating=fields["floating"],
+        joint_names=tuple(fields["joint_names"]),
         parent=parent_arr,
-        kind=np.array(kind, dtype=np.intp),
-        placement_rotation=np.array(placement_rotation, dtype=float).reshape(-1, 3, 3),
-        placement_translation=np.array(placement_translation, dtype=float).reshape(-1, 3),
-        axis=np.array(axis, dtype=float).reshape(-1, 3),
-        mass=np.array(mass, dtype=float),
-        com=np.array(com, dtype=float).reshape(-1, 3),
-        inertia=np.array(inertia, dtype=float).reshape(-1, 3, 3),
+        kind=np.array(fields["kind"], dtype=np.intp),
+        placement_rotation=np.array(fields["placement_rotation"], dtype=float).reshape(-1, 3, 3),
+        placement_translation=np.array(fields["placement_translation"], dtype=float).reshape(-1, 3),
+        axis=np.array(fields["axis"], dtype=float).reshape(-1, 3),
+        mass=np.array(fields["mass"], dtype=float),
+        com=np.array(fields["com"], dtype=float).reshape(-1, 3),
+        inertia=np.array(fields["inertia"], dtype=float).reshape(-1, 3, 3),
         levels=levels,
     )
