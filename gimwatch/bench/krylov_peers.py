@@ -46,23 +46,26 @@ __all__ = [
 
 @dataclass(frozen=True)
 class MatrixFreeKappa:
-    """κ₂ of M(q) from ARPACK on x ↦ M x and x ↦ M⁻¹ x (M never formed).
+    """κ₂ of M(q) from a peer engine on x ↦ M x and x ↦ M⁻¹ x (M never formed).
 
     Attributes:
         kappa: λmax / λmin.
         lambda_max: Largest eigenvalue of M.
         lambda_min: Smallest eigenvalue of M (1 / the largest of M⁻¹).
         products: O(n) products applied (M·x and M⁻¹·x together).
-        vector_max: Eigenvector of λmax, to warm-start a nearby sample.
-        vector_min: Eigenvector of λmin.
+        last_relative_change: Plain Lanczos: relative change of the Ritz values over the last
+            10 steps (below ``rtol`` when converged); NaN from ARPACK (it checks residuals).
+        vector_max: ARPACK: eigenvector of λmax, to warm-start a nearby sample (else None).
+        vector_min: ARPACK: eigenvector of λmin (else None).
     """
 
     kappa: float
     lambda_max: float
     lambda_min: float
     products: int
-    vector_max: np.ndarray = field(repr=False)
-    vector_min: np.ndarray = field(repr=False)
+    last_relative_change: float = float("nan")
+    vector_max: np.ndarray | None = field(default=None, repr=False)
+    vector_min: np.ndarray | None = field(default=None, repr=False)
 
 
 def _zero_gravity_model(robot: Robot) -> pin.Model:
@@ -237,16 +240,26 @@ def _largest_ritz_value(apply, start: np.ndarray, *, rtol: float, max_steps: int
 
 def plain_lanczos_kappa(
     state, *, seed: int = 0, rtol: float = 1e-10, max_steps: int = 3000
-) -> tuple[float, int]:
-    """(κ₂, products) of a DeNOC state by plain Lanczos on ``matvec`` and ``solve``.
+) -> MatrixFreeKappa:
+    """κ₂ of a DeNOC state by plain Lanczos on ``matvec`` and ``solve``.
 
     The O(n) path's κ before the tracker's engine served it: one seeded random start for both
     ends, each stopped when its largest Ritz value changes by less than ``rtol`` over 10 steps
     (no certificate; a lower bound of κ that converges to it).
     """
     start = np.random.default_rng(seed).standard_normal(state.model.nv)
-    top, steps_max, _ = _largest_ritz_value(state.matvec, start, rtol=rtol, max_steps=max_steps)
-    inverse, steps_min, _ = _largest_ritz_value(state.solve, start, rtol=rtol, max_steps=max_steps)
+    top, steps_max, change_max = _largest_ritz_value(
+        state.matvec, start, rtol=rtol, max_steps=max_steps
+    )
+    inverse, steps_min, change_min = _largest_ritz_value(
+        state.solve, start, rtol=rtol, max_steps=max_steps
+    )
     if not (top > 0 and inverse > 0):
         raise ConditioningError("the GIM must be positive definite (Lanczos found λ <= 0)")
-    return float(top * inverse), steps_max + steps_min
+    return MatrixFreeKappa(
+        kappa=float(top * inverse),
+        lambda_max=float(top),
+        lambda_min=float(1.0 / inverse),
+        products=steps_max + steps_min,
+        last_relative_change=max(change_max, change_min),
+    )

@@ -180,8 +180,8 @@ def _tracker_rows(context: BenchContext, table: Table, n: int) -> None:
         lanczos, lanczos_us = _per_sample(
             lambda q: plain_lanczos_kappa(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]
         )
-        reference = np.array([kappa for kappa, _ in lanczos])
-        cold_products = float(np.median([products for _, products in lanczos]))
+        reference = np.array([r.kappa for r in lanczos])
+        cold_products = float(np.median([r.products for r in lanczos]))
         diff = float(np.max(np.abs(kappa[:3] - reference) / reference))
         rows.append(
             dict(
