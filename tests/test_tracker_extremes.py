@@ -1,4 +1,4 @@
-"""κ at one configuration on the κ tracker's engine (metrics/tracker/extremes.py), the O(n) path's κ."""
+"""κ at one configuration on the κ tracker's engine (metrics/tracker/extremes.py)."""
 
 import numpy as np
 import pytest

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from gimwatch.errors import InputError, URDFError
 from gimwatch.model.urdf_text import check_urdf
@@ -89,7 +90,7 @@ class BodyTree:
         return len(self.parent)
 
 
-def _check_finite(source: str, element: str, what: str, value: np.ndarray) -> np.ndarray:
+def _check_finite(source: str, element: str, what: str, value: npt.ArrayLike) -> np.ndarray:
     value = np.asarray(value, dtype=float)
     if not np.all(np.isfinite(value)):
         raise URDFError(source, f"{what} must be finite, got {value.tolist()}", element=element)

@@ -194,9 +194,10 @@ class KappaTracker:
         """The last sample's eigenvectors of λmax and of λmin (unit vectors)."""
         if self._denoc is not None and self._denoc.sampled:
             return self._denoc.eigenvectors()
-        if self._ends[0].block is None:
+        top, low = self._ends[0].block, self._ends[1].block
+        if top is None or low is None:
             raise ConditioningError("the κ tracker has not sampled yet")
-        return self._ends[0].block[-1].copy(), self._ends[1].block[-1].copy()
+        return top[-1].copy(), low[-1].copy()
 
     def _probe(self) -> np.ndarray:
         return self._rng.standard_normal(self.nv)
@@ -209,6 +210,7 @@ class KappaTracker:
         """
         q = np.asarray(q, dtype=float)
         try:
+            certified: bool | None
             if self._denoc is not None:
                 ends = self._denoc.sample(q, self)
                 factors, certified = ends.pop(), True
@@ -255,7 +257,7 @@ class KappaTracker:
         above, below = top * (1.0 + margin), low * (1.0 - margin)
         inertia = getattr(self.products, "shifted_inertia", None)
         counts = None if inertia is None else inertia(above)
-        if counts is not None:  # a provider may decline (None): it cannot shift here
+        if inertia is not None and counts is not None:  # a provider may decline (None)
             return 2, counts[1] == self.nv and inertia(below)[0] == self.nv
         if self.dense is None:
             return 0, None
