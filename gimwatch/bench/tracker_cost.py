@@ -12,8 +12,8 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   (each the largest eigenvalue of its matrix, so float64 resolves it even at κ ~ 1e11, where
   the plain dense κ = eig(M) has lost its digits — its own error is listed). Methods: the
   tracker ([`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on
-  DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's
-  former matrix-free metric, kept as a bench peer: ARPACK at 1e-3 on Pinocchio's RNEA/ABA,
+  DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``arpack_1e-3`` (the watch's
+  former matrix-free ``kappa_lanczos``, kept as a bench peer: ARPACK at 1e-3 on Pinocchio's RNEA/ABA,
   warm-started from the previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it
   would need ~45 GB) and dense κ means nothing (eps·κ ≈ 1e-3): the tracker is compared with
   cold-start plain Lanczos at 1e-10 on DeNOC's operators
@@ -156,7 +156,7 @@ def _dense_rows(robot, data, qs, kappa, tracker_us) -> list[dict]:
             products=[0],
         ),
         dict(
-            method="kappa_lanczos",
+            method="arpack_1e-3",
             time_us=old_us,
             max_rel_error=float(np.max(np.abs(old_kappa - good) / good)),
             note="ARPACK tol 1e-3, Pinocchio RNEA/ABA",
