@@ -13,9 +13,9 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   the plain dense κ = eig(M) has lost its digits — its own error is listed). Methods: the
   tracker ([`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on
   DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``arpack_1e-3`` (the watch's
-  former matrix-free ``kappa_lanczos``, kept as a bench peer: ARPACK at 1e-3 on Pinocchio's RNEA/ABA,
-  warm-started from the previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it
-  would need ~45 GB) and dense κ means nothing (eps·κ ≈ 1e-3): the tracker is compared with
+  former matrix-free ``kappa_lanczos``, kept as a bench peer: ARPACK at 1e-3 on Pinocchio's
+  RNEA/ABA, warm-started from the previous eigenvectors). At n = 1,000 there is no Pinocchio
+  Data (it would need ~45 GB) and dense κ means nothing (eps·κ ≈ 1e-3): the tracker is compared with
   cold-start plain Lanczos at 1e-10 on DeNOC's operators
   ([`plain_lanczos_kappa`][gimwatch.bench.krylov_peers.plain_lanczos_kappa], the bench peer of
   the O(n) path's former κ).
@@ -319,6 +319,33 @@ def verdicts(tracker: list[dict], claim: list[dict], chain_1000: list[dict]) -> 
     return lines
 
 
+_SAMPLES_HEADINGS = {
+    "n": "n",
+    "method": "method",
+    "time_us": "µs / sample",
+    "products_median": "products (median)",
+    "products_max": "products (max)",
+    "factors_median": "factorizations (median)",
+    "fallbacks": "cold fallbacks",
+    "max_rel_error": "max rel. error",
+    "vs_dense": "/ CRBA+eigvalsh",
+    "note": "note",
+}
+_CLAIM_HEADINGS = {
+    "n": "n",
+    "estimator": "estimator",
+    "sample_us": "µs / sample",
+    "median_rel_error": "median rel. error",
+    "max_rel_error": "max rel. error",
+}
+_CHAIN_1000_HEADINGS = {
+    "watch": "scenes/chain_1000.toml watching",
+    "samples": "samples",
+    "wall_s": "wall (s)",
+    "ratio_to_delta": "/ δ alone",
+}
+
+
 def run(context: BenchContext) -> SectionResult:
     """Measure the three tables and summarise against the tracker's cost targets."""
     tracker = Table("tracker_samples", TRACKER_COLUMNS)
@@ -335,44 +362,13 @@ def run(context: BenchContext) -> SectionResult:
         "the samples (the first, a cold start, excluded); errors against λmax(M)·λmax(M⁻¹) "
         "from Pinocchio's dense M and M⁻¹.",
         "",
-        markdown_table(
-            tracker.rows,
-            {
-                "n": "n",
-                "method": "method",
-                "time_us": "µs / sample",
-                "products_median": "products (median)",
-                "products_max": "products (max)",
-                "factors_median": "factorizations (median)",
-                "fallbacks": "cold fallbacks",
-                "max_rel_error": "max rel. error",
-                "vs_dense": "/ CRBA+eigvalsh",
-                "note": "note",
-            },
-        ),
+        markdown_table(tracker.rows, _SAMPLES_HEADINGS),
         "",
         "Along the paper's trajectories (each estimator as the only watched metric):",
         "",
-        markdown_table(
-            claim.rows,
-            {
-                "n": "n",
-                "estimator": "estimator",
-                "sample_us": "µs / sample",
-                "median_rel_error": "median rel. error",
-                "max_rel_error": "max rel. error",
-            },
-        ),
+        markdown_table(claim.rows, _CLAIM_HEADINGS),
         "",
-        markdown_table(
-            chain_1000.rows,
-            {
-                "watch": "scenes/chain_1000.toml watching",
-                "samples": "samples",
-                "wall_s": "wall (s)",
-                "ratio_to_delta": "/ δ alone",
-            },
-        ),
+        markdown_table(chain_1000.rows, _CHAIN_1000_HEADINGS),
         "",
         *[f"- {line}" for line in checks],
     ]

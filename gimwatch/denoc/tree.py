@@ -152,16 +152,10 @@ def _load_yourdfpy(root: ET.Element, source: str):
         logger.disabled = disabled
 
 
-def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>") -> BodyTree:
-    """Read URDF text into a [`BodyTree`][gimwatch.denoc.BodyTree].
-
-    Raises:
-        URDFError: The links do not form a tree, a joint type is not revolute, continuous,
-            prismatic or fixed, or a number DeNOC relies on is not finite (or an axis is 0).
-    """
-    robot = _load_yourdfpy(check_urdf(xml, source, floating=floating), source)
+def _joints_by_parent(joints, source: str) -> dict[str, list]:
+    """The URDF's joints grouped by parent link; a joint type DeNOC does not read is an error."""
     children: dict[str, list] = {}
-    for joint in robot.joints:
+    for joint in joints:
         if joint.type not in _SUPPORTED:
             raise URDFError(
                 source,
@@ -170,6 +164,27 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
                 element=f"joint {joint.name!r}",
             )
         children.setdefault(joint.parent, []).append(joint)
+    return children
+
+
+def _unit_axis(source: str, element: str, axis: npt.ArrayLike) -> np.ndarray:
+    """A joint's axis, checked finite and non-zero, normalised."""
+    direction = _check_finite(source, element, "axis", axis)
+    norm = float(np.linalg.norm(direction))
+    if norm == 0:
+        raise URDFError(source, f"axis must be non-zero, got {direction.tolist()}", element=element)
+    return direction / norm
+
+
+def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>") -> BodyTree:
+    """Read URDF text into a [`BodyTree`][gimwatch.denoc.BodyTree].
+
+    Raises:
+        URDFError: The links do not form a tree, a joint type is not revolute, continuous,
+            prismatic or fixed, or a number DeNOC relies on is not finite (or an axis is 0).
+    """
+    robot = _load_yourdfpy(check_urdf(xml, source, floating=floating), source)
+    children = _joints_by_parent(robot.joints, source)
     links = {link.name: link for link in robot.links}
     child_links = {joint.child for joint in robot.joints}
     root_link = next(name for name in links if name not in child_links)
@@ -192,18 +207,12 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
             if joint.type == "fixed":
                 stack.append((joint.child, body, placed))
                 continue
-            direction = _check_finite(source, element, "axis", joint.axis)
-            norm = float(np.linalg.norm(direction))
-            if norm == 0:
-                raise URDFError(
-                    source, f"axis must be non-zero, got {direction.tolist()}", element=element
-                )
             names.append(joint.name)
             parent.append(body)
             kind.append(JOINT_KINDS[joint.type])
             rotation.append(placed[:3, :3])
             translation.append(placed[:3, 3])
-            axis.append(direction / norm)
+            axis.append(_unit_axis(source, element, joint.axis))
             parts.append([])
             stack.append((joint.child, len(parent) - 1, np.eye(4)))
     merged = [_merge(p) for p in parts]
