@@ -13,7 +13,7 @@ path of ``analyze`` (κ and κ_S of chains and trees DeNOC reads, M never formed
   separates them, and λmin keeps its relative accuracy where a dense eigen-solver (absolute error
   ~eps·λmax) no longer resolves it.
 * On any other pair of operators (``matvec``, ``solve``: S = D^-1/2 M D^-1/2 of
-  [`ScaledState`][gimwatch.metrics.equilibrated.ScaledState]), Lanczos on each with a block of
+  `gimwatch.metrics.equilibrated.ScaledState`), Lanczos on each with a block of
   Ritz vectors; without a way to count eigenvalues past a shift the result is not certified
   (``certified`` False, ``error_estimate`` inf).
 """
