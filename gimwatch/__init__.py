@@ -16,7 +16,6 @@ from gimwatch._version import __version__
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports
     from gimwatch.crosscheck import CrossCheckResult, crosscheck_robot
     from gimwatch.denoc import DenocModel
-    from gimwatch.denoc.linear import MatrixFreeKappa
     from gimwatch.errors import (
         BackendWarning,
         ConditioningError,
@@ -52,12 +51,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     )
     from gimwatch.metrics.dense_analysis import GimAnalysis, analyze_configuration
     from gimwatch.metrics.estimator_quality import estimator_quality
-    from gimwatch.metrics.matrix_free import (
-        gim_inverse_operator,
-        gim_operator,
-        kappa_matrix_free,
-    )
-    from gimwatch.metrics.tracker import KappaTracker, TrackedKappa, track_kappa
+    from gimwatch.metrics.tracker import KappaTracker, TrackedKappa, TrackerSettings, track_kappa
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
     from gimwatch.model.inertia import gim, gim_diagonal
     from gimwatch.model.robots import (
@@ -95,7 +89,7 @@ _EXPORTS: dict[str, str] = {
     "IllConditionedWarning": "gimwatch.errors",
     "InputError": "gimwatch.errors",
     "KappaTracker": "gimwatch.metrics.tracker",
-    "MatrixFreeKappa": "gimwatch.denoc.linear",
+    "TrackerSettings": "gimwatch.metrics.tracker",
     "OutputError": "gimwatch.errors",
     "PlanarChainReference": "gimwatch.stress.reference_planar",
     "Robot": "gimwatch.model.robots",
@@ -129,9 +123,6 @@ _EXPORTS: dict[str, str] = {
     "generate_chain_urdf": "gimwatch.model.chains",
     "gim": "gimwatch.model.inertia",
     "gim_diagonal": "gimwatch.model.inertia",
-    "gim_inverse_operator": "gimwatch.metrics.matrix_free",
-    "gim_operator": "gimwatch.metrics.matrix_free",
-    "kappa_matrix_free": "gimwatch.metrics.matrix_free",
     "ldlt_pivots": "gimwatch.metrics.conditioning",
     "load_robot": "gimwatch.model.robots",
     "default_floating": "gimwatch.model.robots",
@@ -182,7 +173,6 @@ __all__ = [
     "InputError",
     "KappaSensitivities",
     "KappaTracker",
-    "MatrixFreeKappa",
     "OutputError",
     "PlanarChainReference",
     "Robot",
@@ -198,6 +188,7 @@ __all__ = [
     "StressResult",
     "SurveyResult",
     "TrackedKappa",
+    "TrackerSettings",
     "Trajectory",
     "TrajectoryMetrics",
     "TreeReference",
@@ -222,10 +213,7 @@ __all__ = [
     "generate_chain_urdf",
     "gim",
     "gim_diagonal",
-    "gim_inverse_operator",
     "gim_modes",
-    "gim_operator",
-    "kappa_matrix_free",
     "kappa_sensitivities",
     "ldlt_pivots",
     "load_robot",

@@ -58,7 +58,8 @@ class Mutant:
 DENOC = ("tests/test_denoc.py",)
 LONG = ("tests/test_longchain.py",)
 STRESS_QUICK = ("tests/test_stress.py", "-m", "not slow")
-#: the compiled kernels behind analyze_linear and extreme_eigenvalues (gimwatch/denoc/linear.py)
+#: the compiled kernels behind analyze_linear and extreme_eigenvalues (gimwatch/denoc/linear.py,
+#: gimwatch/metrics/tracker/extremes.py)
 COMPILED_STATE = ("tests/test_longchain.py", "-k", "compiled_state or closed_forms or lanczos")
 TRAJECTORY = ("tests/test_trajectory_reference.py",)
 URDF_VALUES = (
@@ -378,35 +379,35 @@ MUTANTS = (
     # --- Lanczos ---
     Mutant(
         "lanczos-stops-at-1e-3",
-        "gimwatch/denoc/linear.py",
-        "if exhausted or change <= rtol:",
-        "if exhausted or change <= max(rtol, 1e-3):",
+        "gimwatch/metrics/tracker/extremes.py",
+        "settings = TrackerSettings(rtol=rtol,",
+        "settings = TrackerSettings(rtol=max(rtol, 1e-3),",
         ("tests/test_longchain.py", "-k", "lanczos or closed_forms"),
-        "plain Lanczos stopping at 1e-3",
+        "the O(n) path's κ (one tracker sample) certified at 1e-3 only",
     ),
     Mutant(
-        "lanczos-300-steps",
-        "gimwatch/denoc/linear.py",
-        "max_steps: int = 3000",
-        "max_steps: int = 300",
+        "lanczos-30-products",
+        "gimwatch/metrics/tracker/extremes.py",
+        "max_products=max_products,",
+        "max_products=30,",
         ("tests/test_longchain.py", "-k", "lanczos or closed_forms"),
-        "plain Lanczos cut at 300 steps",
+        "the O(n) path's κ cut at 30 products per end",
     ),
     Mutant(
         "arpack-tol-1e-3",
-        "gimwatch/metrics/matrix_free.py",
+        "gimwatch/bench/krylov_peers.py",
         'eigsh(operator, k=1, which="LA", v0=v0, tol=tol)',
         'eigsh(operator, k=1, which="LA", v0=v0, tol=max(tol, 1e-3))',
-        ("tests/test_matrix_free.py",),
+        ("tests/test_krylov_peers.py",),
         "ARPACK stopping at 1e-3",
     ),
     Mutant(
-        "lanczos-two-term",
-        "gimwatch/denoc/linear.py",
-        "w = apply(v) - beta * v_previous",
-        "w = apply(v) - 0.5 * beta * v_previous",
-        ("tests/test_longchain.py", "-k", "lanczos or closed_forms"),
-        "Lanczos recurrence with a wrong β term (the tridiagonal is no longer M's projection)",
+        "lanczos-projection-asymmetric",
+        "gimwatch/metrics/tracker/krylov.py",
+        "        H[m, j] = dot\n",
+        "        H[m, j] = 0.5 * dot\n",
+        (*TRACKER, "tests/test_longchain.py", "-k", "lanczos or closed_forms or tracker"),
+        "the engine's projected matrix halved below the diagonal (no longer A's projection)",
     ),
     Mutant(
         "watch-lanczos-tol-1e-1",

@@ -15,10 +15,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from gimwatch.denoc import DenocModel, body_tree, extreme_eigenvalues
+from gimwatch.denoc import DenocModel, body_tree
 from gimwatch.errors import RobotError
 from gimwatch.metrics.analyze import analyze
 from gimwatch.metrics.denoc_robot import denoc_model
+from gimwatch.metrics.tracker import extreme_eigenvalues
 from gimwatch.model.denoc_input import tree_arrays
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
 
@@ -217,7 +218,7 @@ def test_free_joints_below_the_root_against_pinocchio():
     """CRBA's M, RNEA's τ, ABA's q̈ (gravity, v ≠ 0), the energy and κ of a composed model."""
     model = _composed_model()
     data = model.createData()
-    denoc = DenocModel(body_tree(**tree_arrays(model, source="composed")), model.names[1:])
+    denoc = DenocModel(body_tree(tree_arrays(model, source="composed")), model.names[1:])
     rng = np.random.default_rng(2)
     gravity = np.array([0.0, 0.0, -9.81])
     for _ in range(3):

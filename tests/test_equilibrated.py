@@ -252,7 +252,7 @@ def test_the_scaled_tracker_is_certified_by_its_own_sylvester_counts():
     products = ScaledProducts(
         PinocchioProducts(robot), lambda q: gim_diagonal(robot, q, data=robot.new_data())
     )
-    assert hasattr(products, "shifted_inertia")
+    assert products.shifts_by_diagonal
     tracker = KappaTracker(products, robot.nv)
     start, end = random_configurations(robot, 2, seed=11)
     for s in np.linspace(0.0, 1.0, 25):

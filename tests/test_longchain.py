@@ -10,9 +10,10 @@ import pinocchio as pin
 import pytest
 from closed_forms import rod_chain_gim, straight_chain_extreme_eigenvalues
 
-from gimwatch.denoc import DenocModel, chain_body_tree, extreme_eigenvalues, read_body_tree
+from gimwatch.denoc import DenocModel, chain_body_tree, read_body_tree
 from gimwatch.errors import BackendWarning
 from gimwatch.metrics.linear_analysis import analyze_linear, chain_configurations
+from gimwatch.metrics.tracker import extreme_eigenvalues
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
 from gimwatch.model.robots import Robot, load_robot, random_configurations
 from gimwatch.simulation.scene import parse_scene

@@ -64,4 +64,6 @@ def test_a_path_that_needs_them_still_gets_them(tmp_path):
         "w = gw.Watch(r, ('kappa_lanczos',)); w.sample(0.0, gw.neutral_configuration(r))",
         tmp_path,
     )
-    assert "scipy.sparse.linalg" in loaded
+    # the matrix-free κ runs on the tracker's Krylov engine (compiled), not on ARPACK
+    assert "gimwatch.metrics.tracker.krylov" in loaded
+    assert "gimwatch.bench.krylov_peers" not in loaded

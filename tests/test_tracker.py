@@ -12,7 +12,7 @@ from threadpoolctl import threadpool_limits
 from gimwatch.crosscheck import denoc_model
 from gimwatch.denoc import DenocModel
 from gimwatch.errors import ConditioningError
-from gimwatch.metrics.tracker import KappaTracker, track_kappa
+from gimwatch.metrics.tracker import KappaTracker, TrackerSettings, track_kappa
 from gimwatch.metrics.tracker.providers import PinocchioProducts
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import load_robot
@@ -224,7 +224,7 @@ def test_eigenvalue_crossing_is_tracked():
     """The two leading eigenvalues swap (their eigenvectors too): Rayleigh–Ritz on the block."""
     n = 60
     op = _Diagonalised(n)
-    tracker = KappaTracker(op, n, rtol=1e-12)
+    tracker = KappaTracker(op, n, TrackerSettings(rtol=1e-12))
     for t in np.linspace(0.0, 1.0, 11):
         values = _spectrum(n, 10.0 + t, 11.0 - t, 0.5)  # cross at t = 0.5
         result = tracker.sample(values)
@@ -254,11 +254,13 @@ def test_dense_fallback_when_the_cold_start_cannot_converge():
     n = 40
     op = _Diagonalised(n)
     values = _spectrum(n, 10.0, 9.0, 0.5)
-    tracker = KappaTracker(op, n, warm_products=2, max_products=3, dense=lambda v: op.matrix(v))
+    tracker = KappaTracker(
+        op, n, TrackerSettings(warm_products=2, max_products=3), dense=lambda v: op.matrix(v)
+    )
     result = tracker.sample(values)
     assert result.fallback == "dense"
     assert result.kappa == pytest.approx(20.0, rel=1e-12)
-    without = KappaTracker(op, n, warm_products=2, max_products=3)
+    without = KappaTracker(op, n, TrackerSettings(warm_products=2, max_products=3))
     with pytest.raises(ConditioningError, match="did not converge in 3 products"):
         without.sample(values)
 

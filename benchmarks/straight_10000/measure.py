@@ -2,7 +2,8 @@
 
 The bench's ``longchain_kappa`` table stops at n = 4,000 (it also runs the dense eigensolver,
 O(n³)); this records the n = 10,000 figures the docs quote: κ/4n⁴ from plain Lanczos on the
-O(n) products M·x and M⁻¹·x (``gimwatch.denoc.extreme_eigenvalues``, default seed and rtol), its
+O(n) products M·x and M⁻¹·x (``gimwatch.bench.krylov_peers.plain_lanczos_kappa``, the O(n)
+path's former engine, default seed and rtol), its
 number of products, and the products restarted Lanczos (ARPACK through
 ``scipy.sparse.linalg.eigsh``, tol 1e-10, default basis) takes for the same two extreme
 eigenvalues. One process, one core; about 3 minutes, most of it ARPACK.
@@ -24,7 +25,8 @@ import scipy
 from scipy.sparse.linalg import LinearOperator, eigsh
 
 import gimwatch
-from gimwatch.denoc import DenocModel, extreme_eigenvalues
+from gimwatch.bench.krylov_peers import plain_lanczos_kappa
+from gimwatch.denoc import DenocModel
 from gimwatch.model.chains import chain_spec
 
 N = 10_000
@@ -48,7 +50,7 @@ def _arpack_products(apply, n: int) -> tuple[float, int]:
 def main() -> int:
     state = DenocModel.from_chain(chain_spec(N)).state(np.zeros(N))
     began = time.perf_counter()
-    found = extreme_eigenvalues(state)
+    found = plain_lanczos_kappa(state)
     record = {
         "n": N,
         "made_by": "python benchmarks/straight_10000/measure.py (one process, one core)",

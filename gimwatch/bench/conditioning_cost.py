@@ -9,7 +9,7 @@ method is timed (median per call) and compared with the exact κ₂ from CRBA + 
   [`gim_diagonal`][gimwatch.model.inertia.gim_diagonal], O(n), no M;
 * ``pocon_cholesky`` — M by CRBA, Cholesky, LAPACK pocon's κ₁ estimate (O(n³) + O(n²));
 * ``kappa_lanczos_*`` — κ₂ from Lanczos on the RNEA (M·x) and ABA (M⁻¹·x) operators
-  ([`kappa_matrix_free`][gimwatch.metrics.matrix_free.kappa_matrix_free]), at ARPACK tolerance 1e-10
+  ([`kappa_matrix_free`][gimwatch.bench.krylov_peers.kappa_matrix_free]), at ARPACK tolerance 1e-10
   and 1e-3.
 
 Pinocchio's Data grows as nv³ (≈ 1.2 GB at nv = 300), so above nv = 400 a fresh Data is
@@ -25,6 +25,7 @@ import scipy.linalg
 
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.compare import Case, Comparison, run_comparison
+from gimwatch.bench.krylov_peers import kappa_matrix_free
 from gimwatch.bench.plots import plot_cost_vs_n
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits
@@ -34,7 +35,6 @@ from gimwatch.metrics.conditioning import (
     diagonal_ratio,
     extreme_ratio,
 )
-from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
 

@@ -31,6 +31,7 @@ import pinocchio as pin
 
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.integrators import chain_scene_table
+from gimwatch.bench.krylov_peers import kappa_matrix_free
 from gimwatch.bench.plots import plot_pareto
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
@@ -40,7 +41,6 @@ from gimwatch.metrics.conditioning import (
     diagonal_ratio,
     pivot_ratio_forward,
 )
-from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
 from gimwatch.model.robots import Robot, load_robot, random_configurations
 from gimwatch.simulation.scene import parse_scene

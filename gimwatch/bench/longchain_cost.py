@@ -8,8 +8,9 @@ Three tables, each measured in one run:
 * ``longchain_analyze`` — wall time and peak memory (RSS) of a fresh
   ``gimwatch analyze chain:N --json`` process (δ and κ; δ alone at the largest n);
 * ``longchain_kappa`` — κ₂/4n⁴ of the straight chain from the dense route (M formed by
-  n O(n) products, LAPACK ``eigvalsh``) and from the matrix-free route (Lanczos on M·x and
-  M⁻¹·x): the dense λmin carries an absolute error of about eps·λmax, so the dense κ
+  n O(n) products, LAPACK ``eigvalsh``) and from the matrix-free route (the κ tracker's Lanczos
+  on M·x and shift-invert (M − σ·1)⁻¹·x, certified): the dense λmin carries an absolute error
+  of about eps·λmax, so the dense κ
   stops meaning anything as κ nears 1/eps (≈ 4.5e15, n ≈ 3,300 for κ ≈ 4n⁴).
 """
 
@@ -28,8 +29,9 @@ import scipy.linalg
 from gimwatch.bench import BenchContext, SectionResult, Table
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import time_call
-from gimwatch.denoc import ConfigurationState, DenocModel, extreme_eigenvalues
+from gimwatch.denoc import ConfigurationState, DenocModel
 from gimwatch.metrics.conditioning import extreme_ratio
+from gimwatch.metrics.tracker import extreme_eigenvalues
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
 

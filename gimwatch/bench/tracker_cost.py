@@ -1,4 +1,4 @@
-"""Section ``tracker``: κ tracked at O(n) per sample, against CRBA + eig and the old Lanczos.
+"""Section ``tracker``: κ tracked at O(n) per sample, against CRBA + eig and ARPACK.
 
 Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
 
@@ -12,11 +12,13 @@ Three tables, each measured in one run (BLAS on one thread — the CLI pins it):
   (each the largest eigenvalue of its matrix, so float64 resolves it even at κ ~ 1e11, where
   the plain dense κ = eig(M) has lost its digits — its own error is listed). Methods: the
   tracker ([`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] on
-  DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``kappa_lanczos`` (the watch's
-  previous matrix-free metric: ARPACK at 1e-3 on Pinocchio's RNEA/ABA, warm-started from the
-  previous eigenvectors). At n = 1,000 there is no Pinocchio Data (it would need ~45 GB) and dense κ
-  means nothing (eps·κ ≈ 1e-3): the tracker is compared with cold-start Lanczos at 1e-10 on
-  DeNOC's operators ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]).
+  DeNOC's lean products, tolerance 1e-10), ``crba_eigvalsh`` and ``arpack_1e-3`` (the watch's
+  former matrix-free ``kappa_lanczos``, kept as a bench peer: ARPACK at 1e-3 on Pinocchio's
+  RNEA/ABA, warm-started from the previous eigenvectors). At n = 1,000 there is no Pinocchio
+  Data (it would need ~45 GB) and dense κ means nothing (eps·κ ≈ 1e-3): the tracker is compared with
+  cold-start plain Lanczos at 1e-10 on DeNOC's operators
+  ([`plain_lanczos_kappa`][gimwatch.bench.krylov_peers.plain_lanczos_kappa], the bench peer of
+  the O(n) path's former κ).
 * ``tracker_claim`` — along the paper's own trajectories (the bundled ``chain_{4,10,20}``
   scenes): δ, αδ (α = κ(t0)/δ(t0), Eq. 15), the tracker and κ by eig, each as a watch
   metric: median cost of one [`sample`][gimwatch.watch.watch.Watch.sample] and the median /
@@ -37,11 +39,11 @@ import scipy.linalg
 from threadpoolctl import threadpool_limits
 
 from gimwatch.bench import BenchContext, SectionResult, Table
+from gimwatch.bench.krylov_peers import kappa_matrix_free, plain_lanczos_kappa
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits
-from gimwatch.denoc import DenocModel, extreme_eigenvalues
+from gimwatch.denoc import DenocModel
 from gimwatch.metrics.conditioning import extreme_ratio
-from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.metrics.tracker import KappaTracker
 from gimwatch.model.chains import chain_spec
 from gimwatch.model.robots import load_robot
@@ -154,7 +156,7 @@ def _dense_rows(robot, data, qs, kappa, tracker_us) -> list[dict]:
             products=[0],
         ),
         dict(
-            method="kappa_lanczos",
+            method="arpack_1e-3",
             time_us=old_us,
             max_rel_error=float(np.max(np.abs(old_kappa - good) / good)),
             note="ARPACK tol 1e-3, Pinocchio RNEA/ABA",
@@ -176,7 +178,7 @@ def _tracker_rows(context: BenchContext, table: Table, n: int) -> None:
     rows = []
     if data is None:
         lanczos, lanczos_us = _per_sample(
-            lambda q: extreme_eigenvalues(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]
+            lambda q: plain_lanczos_kappa(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]
         )
         reference = np.array([r.kappa for r in lanczos])
         cold_products = float(np.median([r.products for r in lanczos]))
@@ -317,6 +319,33 @@ def verdicts(tracker: list[dict], claim: list[dict], chain_1000: list[dict]) -> 
     return lines
 
 
+_SAMPLES_HEADINGS = {
+    "n": "n",
+    "method": "method",
+    "time_us": "µs / sample",
+    "products_median": "products (median)",
+    "products_max": "products (max)",
+    "factors_median": "factorizations (median)",
+    "fallbacks": "cold fallbacks",
+    "max_rel_error": "max rel. error",
+    "vs_dense": "/ CRBA+eigvalsh",
+    "note": "note",
+}
+_CLAIM_HEADINGS = {
+    "n": "n",
+    "estimator": "estimator",
+    "sample_us": "µs / sample",
+    "median_rel_error": "median rel. error",
+    "max_rel_error": "max rel. error",
+}
+_CHAIN_1000_HEADINGS = {
+    "watch": "scenes/chain_1000.toml watching",
+    "samples": "samples",
+    "wall_s": "wall (s)",
+    "ratio_to_delta": "/ δ alone",
+}
+
+
 def run(context: BenchContext) -> SectionResult:
     """Measure the three tables and summarise against the tracker's cost targets."""
     tracker = Table("tracker_samples", TRACKER_COLUMNS)
@@ -333,44 +362,13 @@ def run(context: BenchContext) -> SectionResult:
         "the samples (the first, a cold start, excluded); errors against λmax(M)·λmax(M⁻¹) "
         "from Pinocchio's dense M and M⁻¹.",
         "",
-        markdown_table(
-            tracker.rows,
-            {
-                "n": "n",
-                "method": "method",
-                "time_us": "µs / sample",
-                "products_median": "products (median)",
-                "products_max": "products (max)",
-                "factors_median": "factorizations (median)",
-                "fallbacks": "cold fallbacks",
-                "max_rel_error": "max rel. error",
-                "vs_dense": "/ CRBA+eigvalsh",
-                "note": "note",
-            },
-        ),
+        markdown_table(tracker.rows, _SAMPLES_HEADINGS),
         "",
         "Along the paper's trajectories (each estimator as the only watched metric):",
         "",
-        markdown_table(
-            claim.rows,
-            {
-                "n": "n",
-                "estimator": "estimator",
-                "sample_us": "µs / sample",
-                "median_rel_error": "median rel. error",
-                "max_rel_error": "max rel. error",
-            },
-        ),
+        markdown_table(claim.rows, _CLAIM_HEADINGS),
         "",
-        markdown_table(
-            chain_1000.rows,
-            {
-                "watch": "scenes/chain_1000.toml watching",
-                "samples": "samples",
-                "wall_s": "wall (s)",
-                "ratio_to_delta": "/ δ alone",
-            },
-        ),
+        markdown_table(chain_1000.rows, _CHAIN_1000_HEADINGS),
         "",
         *[f"- {line}" for line in checks],
     ]

@@ -4,7 +4,7 @@ The paper's chain of n rods swings under gravity with fixed-step RK4 (4 ABA call
 step, the ``aba`` backend); the watch runs at the samples only, every
 `STEPS_PER_SAMPLE` steps, as in the scenes. Watches (`WATCHES`): none, δ
 (O(n) diagonal), αδ (Eq. 15, one eigen-solve at t0), κ by CRBA + eigensolver, and κ by
-warm-started Lanczos at tolerance 1e-3 on the RNEA/ABA operators (``kappa_lanczos``).
+the κ tracker at tolerance 1e-3 on O(n) products (``kappa_lanczos``).
 
 Per (n, watch) the section reports
 

@@ -15,18 +15,14 @@ and the O(n) UDUᵀ forward dynamics, without Pinocchio, so that the two can che
   inverse dynamics) as one compiled call each with preallocated buffers, fixed and floating bases,
   in Pinocchio's coordinate order (`.fused`); ``DenocModel.lean()`` builds it.
 * [`LinearTimeModel`][gimwatch.denoc.LinearTimeModel] — fixed-base trees, one angle per body, on the
-  same compiled kernels (`.fused`): O(n) time and memory, for chains of 10^4–10^5 links, with the
-  matrix-free condition number [`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues].
+  same compiled kernels (`.fused`): O(n) time and memory, for chains of 10^4–10^5 links. Their
+  matrix-free condition number is the metrics layer's
+  ([`extreme_eigenvalues`][gimwatch.metrics.tracker.extremes.extreme_eigenvalues]).
 """
 
 from gimwatch.denoc.chain import chain_body_tree
 from gimwatch.denoc.lean import LeanModel, LeanState
-from gimwatch.denoc.linear import (
-    ConfigurationState,
-    LinearTimeModel,
-    MatrixFreeKappa,
-    extreme_eigenvalues,
-)
+from gimwatch.denoc.linear import ConfigurationState, LinearTimeModel
 from gimwatch.denoc.model import DenocModel
 from gimwatch.denoc.tree import BodyTree, body_tree, read_body_tree
 
@@ -37,9 +33,7 @@ __all__ = [
     "LeanModel",
     "LeanState",
     "LinearTimeModel",
-    "MatrixFreeKappa",
     "body_tree",
     "chain_body_tree",
-    "extreme_eigenvalues",
     "read_body_tree",
 ]

@@ -301,6 +301,10 @@ class LeanState:
         """Diag M(q), O(n)."""
         return self.model.gim_diagonal(self.q)[self._order]
 
+    def compiled(self) -> tuple[LeanModel, np.ndarray]:
+        """(the compiled model, q in its layout): for O(n) work on buffers of its own."""
+        return self.model, self.q
+
     @property
     def centres_of_mass(self) -> np.ndarray:
         """World positions of the bodies' centres of mass (N, 3), m (row 0: the root's)."""

@@ -4,7 +4,9 @@
 [`BodyTree`][gimwatch.denoc.BodyTree]; [`LinearTimeModel.at`][gimwatch.denoc.LinearTimeModel.at]
 gives the [`ConfigurationState`][gimwatch.denoc.ConfigurationState] at one configuration with diag
 M, M·x, M⁻¹·x, the UDUᵀ pivots, inverse and forward dynamics, each O(n) in time and memory.
-[`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues] turns M·x and M⁻¹·x into κ₂ by Lanczos.
+κ₂ from these operators is the metrics layer's
+([`extreme_eigenvalues`][gimwatch.metrics.tracker.extremes.extreme_eigenvalues], on the κ
+tracker's Krylov engine).
 
 Coordinates are the tree's body order (parents first), one per body: an angle for revolute
 and continuous joints, a displacement for prismatic ones. Pinocchio's Data for an n-joint
@@ -13,18 +15,17 @@ model needs memory growing as n³, and the dense GIM n²; nothing here grows fas
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 import numpy.typing as npt
-import scipy.linalg
 
 from gimwatch.denoc import fused
 from gimwatch.denoc.lean import LeanModel
 from gimwatch.denoc.tree import BodyTree
 from gimwatch.errors import ConditioningError, InputError
 
-__all__ = ["ConfigurationState", "LinearTimeModel", "MatrixFreeKappa", "extreme_eigenvalues"]
+__all__ = ["ConfigurationState", "LinearTimeModel"]
 
 _REVOLUTE, _CONTINUOUS = 1, 2
 
@@ -153,6 +154,14 @@ class ConfigurationState:
         """World positions of the moving bodies' centres of mass (nv, 3), m."""
         return self._vec[1:, fused.ORIGIN_ROW] + self._vec[1:, fused.COM_OFFSET_ROW]
 
+    def compiled(self) -> tuple[LeanModel, np.ndarray]:
+        """(the compiled model, q in its layout): for O(n) work on buffers of its own.
+
+        The κ tracker factors M − σ·1 there (shift-invert, Sylvester's inertia), which the
+        products of this state do not offer.
+        """
+        return self.model.kernels, self.q
+
     def _workspace(self) -> tuple:
         return self._rot, self._vec, self._block, self._six, self._scal, self._root
 
@@ -209,113 +218,3 @@ class ConfigurationState:
         n = self.model.nv
         M = np.column_stack([self.matvec(column) for column in np.eye(n)])
         return (M + M.T) / 2
-
-
-@dataclass(frozen=True)
-class MatrixFreeKappa:
-    """κ₂ of M(q) from Lanczos on x ↦ M x and x ↦ M⁻¹ x (M never formed).
-
-    The one record of every matrix-free κ in gimwatch: DeNOC's plain Lanczos
-    ([`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues]) and ARPACK on Pinocchio's RNEA/ABA
-    ([`kappa_matrix_free`][gimwatch.metrics.matrix_free.kappa_matrix_free]). Ritz values approach
-    the extreme eigenvalues from inside the spectrum, so ``lambda_max`` and ``1 / lambda_min``
-    are lower bounds and ``kappa`` a lower bound of κ₂ that converges to it.
-
-    Attributes:
-        kappa: λmax / λmin.
-        lambda_max: Largest eigenvalue of M.
-        lambda_min: Smallest eigenvalue of M (1 / the largest of M⁻¹).
-        products: O(n) products applied (M·x and M⁻¹·x together).
-        last_relative_change: Relative change of the Ritz values over the last 10 steps
-            (below ``rtol`` when converged; larger when ``max_steps`` ran out); NaN when
-            ARPACK, which checks its own residuals, found them.
-        vector_max: Eigenvector of λmax, to warm-start a nearby sample (None if not kept).
-        vector_min: Eigenvector of λmin (None if not kept).
-    """
-
-    kappa: float
-    lambda_max: float
-    lambda_min: float
-    products: int
-    last_relative_change: float = float("nan")
-    vector_max: np.ndarray | None = field(default=None, repr=False)
-    vector_min: np.ndarray | None = field(default=None, repr=False)
-
-
-def _largest_ritz_value(apply, start: np.ndarray, *, rtol: float, max_steps: int):
-    """Largest eigenvalue of a symmetric operator by plain Lanczos, O(n) memory.
-
-    No restarts: the smallest eigenvalues of a long chain's M are clustered (relative gaps
-    ~1/n²), where restarted ARPACK (``eigsh``) needs 10^4–10^5 products at n = 10^4 while
-    the largest Ritz value itself settles in a few hundred steps. No reorthogonalisation
-    either: losing orthogonality only adds spurious copies of converged Ritz values, never
-    moves the extreme one, and keeping the basis would cost O(n·steps) memory. Stops when
-    the largest Ritz value changes by less than ``rtol`` (relative) over 10 steps.
-
-    Returns:
-        (Ritz value, steps taken, its relative change over the last 10 steps).
-    """
-    v = start / np.linalg.norm(start)
-    v_previous = np.zeros_like(v)
-    alphas: list[float] = []
-    betas: list[float] = []
-    beta = 0.0
-    previous = np.nan
-    steps = min(max_steps, start.size)
-    for k in range(steps):
-        w = apply(v) - beta * v_previous
-        alpha = float(w @ v)
-        w -= alpha * v
-        alphas.append(alpha)
-        beta = float(np.linalg.norm(w))
-        exhausted = beta <= 1e-14 * max(abs(a) for a in alphas) or k == steps - 1
-        if k % 10 == 9 or exhausted:
-            theta = scipy.linalg.eigh_tridiagonal(
-                np.array(alphas),
-                np.array(betas),
-                eigvals_only=True,
-                select="i",
-                select_range=(k, k),
-            )[0]
-            change = abs(theta - previous) / abs(theta)
-            if exhausted or change <= rtol:
-                return float(theta), k + 1, float(change) if k >= 10 else 0.0
-            previous = theta
-        betas.append(beta)
-        v_previous, v = v, w / beta
-    raise AssertionError("unreachable")  # the loop returns at its last step
-
-
-def extreme_eigenvalues(
-    state: ConfigurationState, *, seed: int = 0, rtol: float = 1e-10, max_steps: int = 3000
-) -> MatrixFreeKappa:
-    """κ₂ of M(q) from its extreme eigenvalues with O(n) operators only.
-
-    λmin comes from the largest eigenvalue of M⁻¹ applied by the articulated-body
-    recursion, so it keeps its relative accuracy when κ nears 1/eps, where a dense
-    eigensolver (λmin with an absolute error of about eps·λmax) no longer resolves it. The
-    start vector is random and seeded: a vector of ones is nearly orthogonal to the smallest
-    eigenvectors of a straight chain.
-
-    Args:
-        state: The configuration state.
-        seed: Seed of the random start vector.
-        rtol: Relative change of the Ritz values at which Lanczos stops.
-        max_steps: Lanczos steps per eigenvalue at most.
-    """
-    start = np.random.default_rng(seed).standard_normal(state.model.nv)
-    lam_max, steps_max, change_max = _largest_ritz_value(
-        state.matvec, start, rtol=rtol, max_steps=max_steps
-    )
-    inv_min, steps_min, change_min = _largest_ritz_value(
-        state.solve, start, rtol=rtol, max_steps=max_steps
-    )
-    if not (lam_max > 0 and inv_min > 0):
-        raise ConditioningError("the GIM must be positive definite (Lanczos found λ <= 0)")
-    return MatrixFreeKappa(
-        kappa=float(lam_max * inv_min),
-        lambda_max=float(lam_max),
-        lambda_min=float(1.0 / inv_min),
-        products=steps_max + steps_min,
-        last_relative_change=max(change_max, change_min),
-    )

@@ -14,14 +14,18 @@ root (the world): many free bodies, or robots side by side.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import logging
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
-from gimwatch.errors import URDFError
+from gimwatch.errors import InputError, URDFError
 from gimwatch.model.urdf_text import check_urdf
 
 __all__ = [
@@ -86,7 +90,7 @@ class BodyTree:
         return len(self.parent)
 
 
-def _check_finite(source: str, element: str, what: str, value: np.ndarray) -> np.ndarray:
+def _check_finite(source: str, element: str, what: str, value: npt.ArrayLike) -> np.ndarray:
     value = np.asarray(value, dtype=float)
     if not np.all(np.isfinite(value)):
         raise URDFError(source, f"{what} must be finite, got {value.tolist()}", element=element)
@@ -148,16 +152,10 @@ def _load_yourdfpy(root: ET.Element, source: str):
         logger.disabled = disabled
 
 
-def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>") -> BodyTree:
-    """Read URDF text into a [`BodyTree`][gimwatch.denoc.BodyTree].
-
-    Raises:
-        URDFError: The links do not form a tree, a joint type is not revolute, continuous,
-            prismatic or fixed, or a number DeNOC relies on is not finite (or an axis is 0).
-    """
-    robot = _load_yourdfpy(check_urdf(xml, source, floating=floating), source)
+def _joints_by_parent(joints, source: str) -> dict[str, list]:
+    """The URDF's joints grouped by parent link; a joint type DeNOC does not read is an error."""
     children: dict[str, list] = {}
-    for joint in robot.joints:
+    for joint in joints:
         if joint.type not in _SUPPORTED:
             raise URDFError(
                 source,
@@ -166,6 +164,27 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
                 element=f"joint {joint.name!r}",
             )
         children.setdefault(joint.parent, []).append(joint)
+    return children
+
+
+def _unit_axis(source: str, element: str, axis: npt.ArrayLike) -> np.ndarray:
+    """A joint's axis, checked finite and non-zero, normalised."""
+    direction = _check_finite(source, element, "axis", axis)
+    norm = float(np.linalg.norm(direction))
+    if norm == 0:
+        raise URDFError(source, f"axis must be non-zero, got {direction.tolist()}", element=element)
+    return direction / norm
+
+
+def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>") -> BodyTree:
+    """Read URDF text into a [`BodyTree`][gimwatch.denoc.BodyTree].
+
+    Raises:
+        URDFError: The links do not form a tree, a joint type is not revolute, continuous,
+            prismatic or fixed, or a number DeNOC relies on is not finite (or an axis is 0).
+    """
+    robot = _load_yourdfpy(check_urdf(xml, source, floating=floating), source)
+    children = _joints_by_parent(robot.joints, source)
     links = {link.name: link for link in robot.links}
     child_links = {joint.child for joint in robot.joints}
     root_link = next(name for name in links if name not in child_links)
@@ -188,56 +207,51 @@ def read_body_tree(xml: str, *, floating: bool = False, source: str = "<string>"
             if joint.type == "fixed":
                 stack.append((joint.child, body, placed))
                 continue
-            direction = _check_finite(source, element, "axis", joint.axis)
-            norm = float(np.linalg.norm(direction))
-            if norm == 0:
-                raise URDFError(
-                    source, f"axis must be non-zero, got {direction.tolist()}", element=element
-                )
             names.append(joint.name)
             parent.append(body)
             kind.append(JOINT_KINDS[joint.type])
             rotation.append(placed[:3, :3])
             translation.append(placed[:3, 3])
-            axis.append(direction / norm)
+            axis.append(_unit_axis(source, element, joint.axis))
             parts.append([])
             stack.append((joint.child, len(parent) - 1, np.eye(4)))
     merged = [_merge(p) for p in parts]
     return body_tree(
-        source=source,
-        floating=floating,
-        joint_names=names,
-        parent=parent,
-        kind=kind,
-        placement_rotation=rotation,
-        placement_translation=translation,
-        axis=axis,
-        mass=[m for m, _, _ in merged],
-        com=[c for _, c, _ in merged],
-        inertia=[i for _, _, i in merged],
+        dict(
+            source=source,
+            floating=floating,
+            joint_names=names,
+            parent=parent,
+            kind=kind,
+            placement_rotation=rotation,
+            placement_translation=translation,
+            axis=axis,
+            mass=[m for m, _, _ in merged],
+            com=[c for _, c, _ in merged],
+            inertia=[i for _, _, i in merged],
+        )
     )
 
 
-def body_tree(
-    *,
-    source: str,
-    floating: bool,
-    joint_names,
-    parent,
-    kind,
-    placement_rotation,
-    placement_translation,
-    axis,
-    mass,
-    com,
-    inertia,
-) -> BodyTree:
+def body_tree(fields: Mapping[str, Any]) -> BodyTree:
     """A [`BodyTree`][gimwatch.denoc.BodyTree] from per-body arrays, parents numbered first.
 
-    Fields as in `BodyTree` (``levels`` is computed). Body 0 is the root; with ``floating``
-    False it is the world (its inertia never enters M) and any of its children may be the
-    root of a tree of its own, on a free joint (`FREE_KIND`) or not.
+    ``fields`` maps each field of `BodyTree` but ``levels`` (computed here) to its value:
+    ``source``, ``floating``, ``joint_names``, ``parent``, ``kind``, ``placement_rotation``,
+    ``placement_translation``, ``axis``, ``mass``, ``com``, ``inertia``. Body 0 is the root;
+    with ``floating`` False it is the world (its inertia never enters M) and any of its
+    children may be the root of a tree of its own, on a free joint (`FREE_KIND`) or not.
+
+    Raises:
+        InputError: A field is missing or unknown.
     """
+    wanted = [f.name for f in dataclasses.fields(BodyTree) if f.name != "levels"]
+    if sorted(fields) != sorted(wanted):
+        missing, unknown = sorted(set(wanted) - set(fields)), sorted(set(fields) - set(wanted))
+        raise InputError(
+            "body_tree fields", f"exactly {wanted}", f"missing {missing}, unknown {unknown}"
+        )
+    parent = fields["parent"]
     parent_arr = np.array(parent, dtype=np.intp)
     depth = np.zeros(len(parent_arr), dtype=np.intp)
     for i in range(1, len(parent_arr)):  # parents are numbered before their children
@@ -245,16 +259,16 @@ def body_tree(
     order = np.argsort(depth, kind="stable")
     levels = tuple(np.split(order, np.flatnonzero(np.diff(depth[order])) + 1)[1:])
     return BodyTree(
-        source=source,
-        floating=floating,
-        joint_names=tuple(joint_names),
+        source=fields["source"],
+        floating=fields["floating"],
+        joint_names=tuple(fields["joint_names"]),
         parent=parent_arr,
-        kind=np.array(kind, dtype=np.intp),
-        placement_rotation=np.array(placement_rotation, dtype=float).reshape(-1, 3, 3),
-        placement_translation=np.array(placement_translation, dtype=float).reshape(-1, 3),
-        axis=np.array(axis, dtype=float).reshape(-1, 3),
-        mass=np.array(mass, dtype=float),
-        com=np.array(com, dtype=float).reshape(-1, 3),
-        inertia=np.array(inertia, dtype=float).reshape(-1, 3, 3),
+        kind=np.array(fields["kind"], dtype=np.intp),
+        placement_rotation=np.array(fields["placement_rotation"], dtype=float).reshape(-1, 3, 3),
+        placement_translation=np.array(fields["placement_translation"], dtype=float).reshape(-1, 3),
+        axis=np.array(fields["axis"], dtype=float).reshape(-1, 3),
+        mass=np.array(fields["mass"], dtype=float),
+        com=np.array(fields["com"], dtype=float).reshape(-1, 3),
+        inertia=np.array(fields["inertia"], dtype=float).reshape(-1, 3, 3),
         levels=levels,
     )

@@ -41,7 +41,7 @@ def denoc_model(robot: Robot, *, parse: bool = False, rigid: bool = False) -> De
     if robot.chain is not None and not robot.floating and not parse:
         return DenocModel.from_chain(robot.chain)  # no URDF parsing for chain:N
     if not robot.urdf_xml:
-        tree = body_tree(**tree_arrays(robot.model, source=robot.source))
+        tree = body_tree(tree_arrays(robot.model, source=robot.source))
         return DenocModel(tree, robot.joint_names)
     order = list(robot.joint_names)
     if robot.free_base:

@@ -15,7 +15,8 @@ and δ do.
   of S by a symmetric eigen-solve;
 * [`ScaledState`][gimwatch.metrics.equilibrated.ScaledState] — S·x and S⁻¹·y from the O(n)
   products of DeNOC's linear-time state and its O(n) diagonal, for
-  [`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues] (Lanczos);
+  [`extreme_eigenvalues`][gimwatch.metrics.tracker.extremes.extreme_eigenvalues] (the κ
+  tracker's engine);
 * [`ScaledProducts`][gimwatch.metrics.equilibrated.ScaledProducts] — the same for any provider of
   the κ tracker (``configure``, ``gim_product``, ``gim_solve``), so that
   [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] tracks κ_S along a trajectory.
@@ -77,7 +78,7 @@ class ScaledState:
 
     ``S x = D^-1/2 M (D^-1/2 x)`` and ``S⁻¹ y = D^1/2 M⁻¹ (D^1/2 y)``, with D = diag M from the
     state's O(n) recursion. Exposes ``model`` (for ``nv``), ``matvec`` and ``solve``: what
-    [`extreme_eigenvalues`][gimwatch.denoc.extreme_eigenvalues] reads.
+    [`extreme_eigenvalues`][gimwatch.metrics.tracker.extremes.extreme_eigenvalues] reads.
 
     Args:
         state: A [`ConfigurationState`][gimwatch.denoc.ConfigurationState] (``diagonal()``,
@@ -129,17 +130,27 @@ class ScaledProducts:
         """S⁻¹ y."""
         return self.products.gim_solve(y / self.scale) / self.scale
 
-    def __getattr__(self, name: str):
-        # the Sylvester certificate of S exists where M's provider shifts by a diagonal:
-        # S − σ·1 = D^-1/2 (M − σ·D) D^-1/2 has the pivot signs of M − σ·D (a congruence)
-        if name == "shifted_inertia" and _shifts_by_diagonal(self.products):
-            return lambda shift: self.products.shifted_inertia(shift, weights=self.scale**-2)
-        raise AttributeError(name)
+    def shifted_inertia(self, shift: float) -> tuple[int, int] | None:
+        """(positive, negative) pivots of S − shift·1, or None when M's provider cannot say.
 
+        S − σ·1 = D^-1/2 (M − σ·D) D^-1/2 has the pivot signs of M − σ·D (a congruence), so the
+        Sylvester certificate of S exists where M's provider shifts by a diagonal
+        (``shifted_inertia(shift, weights)``, as
+        [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts]); DeNOC's
+        compiled factor shifts by a multiple of 1 only, and the tracker then leaves κ_S
+        uncertified or certifies it on the dense fallback.
+        """
+        if self.scale is None:
+            raise ConditioningError("ScaledProducts.shifted_inertia before configure(q)")
+        if not self.shifts_by_diagonal:
+            return None
+        return self.products.shifted_inertia(shift, weights=self.scale**-2)
 
-def _shifts_by_diagonal(products) -> bool:
-    method = getattr(products, "shifted_inertia", None)
-    return method is not None and "weights" in inspect.signature(method).parameters
+    @property
+    def shifts_by_diagonal(self) -> bool:
+        """Whether M's provider can shift by a diagonal (``shifted_inertia(shift, weights)``)."""
+        method = getattr(self.products, "shifted_inertia", None)
+        return method is not None and "weights" in inspect.signature(method).parameters
 
 
 def equilibrated_dense(dense: Callable[[np.ndarray], np.ndarray]):

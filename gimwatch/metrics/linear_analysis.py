@@ -4,8 +4,9 @@ Pinocchio's Data for an n-joint model needs memory growing as n³ (about 1.8 GB 
 8 GB at 500), and the dense GIM n². Above `DATA_NV_LIMIT` joints
 (or on request) gimwatch analyses chains and trees — fixed or floating, with ball and free
 joints on any body and several trees — with the compiled DeNOC recursions instead: diag M and
-δ in O(n); κ₂ from Lanczos on M·x and M⁻¹·x (O(n) each), κ_S from Lanczos on
-D^-1/2 M D^-1/2 x and its inverse (the same products, scaled by the O(n) diagonal);
+δ in O(n); κ₂ from one cold sample of the κ tracker (its Lanczos on M·x and shift-invert
+(M − σ·1)⁻¹·x, O(n) each, both ends certified by Sylvester's law of inertia), κ_S from the same
+engine on D^-1/2 M D^-1/2 x and its inverse (the same products, scaled by the O(n) diagonal);
 the backward (UDUᵀ) pivots from the articulated-body factor. The forward (LDLᵀ) pivots and
 the full spectrum need M itself and are not computed on this path.
 """
@@ -61,8 +62,8 @@ def analyze_linear(
         q: Configuration in the model's layout.
         name: Robot name for the record.
         metrics: Which of `LINEAR_METRICS` to compute; the others are None.
-        seed: Seed of the Lanczos start vector.
-        rtol: Relative change of the Ritz values at which Lanczos stops.
+        seed: Seed of the Lanczos probe vectors.
+        rtol: Relative tolerance on each extreme eigenvalue of M and of S (certified for M).
     """
     unknown = sorted(set(metrics) - set(LINEAR_METRICS))
     if unknown:

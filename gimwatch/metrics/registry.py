@@ -10,8 +10,8 @@ state computes the expensive quantities lazily, at most once, and only when a me
   composite-mass recursion (one call, buffers kept), the backend's ``gim_diagonal(q)``, or
   DeNOC's linear-time state;
 * ``eigenvalues`` (ascending) and ``eigenvectors`` — a symmetric eigen-solve of M, O(n³);
-* ``extremes`` (λmin, λmax) — from the eigen-solve when M is formed, else by Lanczos on the
-  O(n) products M·x and M⁻¹·x of DeNOC's linear-time state (no M);
+* ``extremes`` (λmin, λmax) — from the eigen-solve when M is formed, else from the O(n)
+  products of DeNOC's linear-time state (no M) on the κ tracker's engine;
 * ``equilibrated_extremes`` — (λmin, λmax) of S = D^-1/2 M D^-1/2 (κ_S), dense from M or by
   Lanczos on S·x and S⁻¹·x from the linear state's O(n) products and diagonal;
 * ``ldlt_pivots`` / ``udut_pivots`` — from the Cholesky factor of M, or (UDUᵀ) from the O(n)
@@ -145,7 +145,7 @@ class GimState:
         """(λmin, λmax): from the eigen-solve, or by Lanczos on the O(n) products."""
         if self._extremes is None:
             if self.linear is not None:
-                from gimwatch.denoc import extreme_eigenvalues
+                from gimwatch.metrics.tracker.extremes import extreme_eigenvalues
 
                 seed, rtol = self.lanczos
                 found = extreme_eigenvalues(self.linear, seed=seed, rtol=rtol)
@@ -160,7 +160,7 @@ class GimState:
         """(λmin, λmax) of S = D^-1/2 M D^-1/2: eigen-solve of S, or Lanczos at O(n)."""
         if self._equilibrated is None:
             if self.linear is not None:
-                from gimwatch.denoc import extreme_eigenvalues
+                from gimwatch.metrics.tracker.extremes import extreme_eigenvalues
 
                 seed, rtol = self.lanczos
                 scaled = equilibrated.ScaledState(self.linear, self.linear.diagonal())
@@ -241,12 +241,12 @@ class KappaEquilibratedTracked(Metric):
 
 
 class KappaLanczos(Metric):
-    """κ₂ = λmax / λmin (Eq. 6) by low-accuracy Lanczos on the RNEA and ABA operators.
+    """κ₂ = λmax / λmin (Eq. 6) by low-accuracy Lanczos on O(n) products, no M formed.
 
-    No M is formed
-    ([`kappa_matrix_free`][gimwatch.metrics.matrix_free.kappa_matrix_free], ARPACK tolerance `TOL`);
-    each sample starts from the previous sample's extreme eigenvectors, so along a smooth trajectory
-    a few O(n) products per sample suffice.
+    The κ tracker ([`KappaTracker`][gimwatch.metrics.tracker.KappaTracker], the one Krylov engine
+    of gimwatch) at relative tolerance `TOL` on DeNOC's compiled M·x and M⁻¹·y (Pinocchio's
+    RNEA/ABA when DeNOC cannot read the robot); each sample starts from the previous sample's
+    extreme eigenvectors, so along a smooth trajectory a few O(n) products per sample suffice.
     """
 
     name = "kappa_lanczos"
@@ -254,21 +254,18 @@ class KappaLanczos(Metric):
     TOL: ClassVar[float] = 1e-3
 
     def __init__(self) -> None:
-        self.start: tuple[np.ndarray, np.ndarray] | None = None
-        self.data = None
+        self.tracker = None
 
     def __call__(self, state):
-        # imported here: SciPy's ARPACK and the compiled DeNOC kernels cost ~0.4 s to import,
-        # which the dense path (analyze, the watch without this metric) never pays
-        from gimwatch.metrics.matrix_free import kappa_matrix_free
+        if self.tracker is None:
+            # imported here: the compiled kernels cost a fraction of a second to import,
+            # which the dense path (analyze, the watch without this metric) never pays
+            from gimwatch.metrics.tracker import KappaTracker, TrackerSettings
+            from gimwatch.metrics.tracker.providers import gim_products
 
-        if self.data is None:  # RNEA/ABA need a Pinocchio Data, even when M comes from DeNOC
-            self.data = state.robot.new_data() if state.data is None else state.data
-        result = kappa_matrix_free(
-            state.robot, state.q, data=self.data, seed=0, tol=self.TOL, start=self.start
-        )
-        self.start = (result.vector_max, result.vector_min)
-        return result.kappa
+            provider = state.lean or gim_products(state.robot, state.dynamics, state.data)
+            self.tracker = KappaTracker(provider, state.robot.nv, TrackerSettings(rtol=self.TOL))
+        return self.tracker.sample(state.q).kappa
 
 
 class KappaTracked(Metric):

@@ -67,9 +67,9 @@ import scipy.linalg
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.tracker.denoc import CERTIFY, STOP, DenocEnds
-from gimwatch.metrics.tracker.krylov import Workspace, leading_python
+from gimwatch.metrics.tracker.krylov import Workspace, leading_callable
 
-__all__ = ["KappaTracker", "TrackedKappa", "track_kappa"]
+__all__ = ["KappaTracker", "TrackedKappa", "TrackerSettings", "track_kappa"]
 
 _ORDER = ("", "start", "cold")
 
@@ -122,6 +122,31 @@ class _End:
         self.workspace = Workspace(n)
 
 
+@dataclass(frozen=True)
+class TrackerSettings:
+    """How hard the κ tracker works and when it gives up a warm start.
+
+    Attributes:
+        rtol: Relative tolerance on each extreme eigenvalue, certified (Lanczos stops at
+            rtol/4, the certificate holds each end to rtol).
+        warm_products: Products per end the warm start may take before it counts as failed.
+        max_products: Products per end of the cold start before the dense fallback
+            (None: 400 + 4 n).
+        jump: Relative change of an extreme eigenvalue since the previous sample beyond which
+            the warm result is re-checked by a cold start.
+        seed: Seed of the random probe vectors.
+        blocks: Ritz vectors carried from sample to sample, (λmax end, 1/λmin end); the
+            compiled DeNOC path carries 2 at the λmin end (shift-invert separates it).
+    """
+
+    rtol: float = 1e-10
+    warm_products: int = 80
+    max_products: int | None = None
+    jump: float = 0.5
+    seed: int = 0
+    blocks: tuple[int, int] = (2, 8)
+
+
 class KappaTracker:
     """Tracks κ₂(M(q)) sample after sample from O(n) products (see the module docstring).
 
@@ -132,42 +157,34 @@ class KappaTracker:
             compiled, with shift-invert for λmin), or
             [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts]. Optional:
             ``shifted_inertia(shift)`` ((positive, negative) pivots of an LDLᵀ of M − shift·1,
-            for the certificates) and ``gim_matrix()`` (dense M, for a recovery).
+            for the certificates; it may return None when it cannot shift) and ``gim_matrix()``
+            (dense M, for a recovery).
         nv: Size of M.
-        rtol: Relative tolerance on each extreme eigenvalue, certified (Lanczos stops at
-            rtol/4, the certificate holds each end to rtol).
-        warm_products: Products per end the warm start may take before it counts as failed.
-        max_products: Products per end of the cold start before the dense fallback.
-        jump: Relative change of an extreme eigenvalue since the previous sample beyond which
-            the warm result is re-checked by a cold start.
-        seed: Seed of the random probe vectors.
+        settings: Tolerance, budgets and seed
+            ([`TrackerSettings`][gimwatch.metrics.tracker.TrackerSettings]; None: the defaults).
         dense: ``q ↦ M(q)`` for the last fallback and, on providers without
             ``shifted_inertia``, the certificates (None: raise, or leave uncertified).
-        blocks: Ritz vectors carried from sample to sample, (λmax end, 1/λmin end); the
-            compiled DeNOC path carries 2 at the λmin end (shift-invert separates it).
     """
 
     def __init__(
         self,
         products,
         nv: int,
+        settings: TrackerSettings | None = None,
         *,
-        rtol: float = 1e-10,
-        warm_products: int = 80,
-        max_products: int | None = None,
-        jump: float = 0.5,
-        seed: int = 0,
         dense: Callable[[np.ndarray], np.ndarray] | None = None,
-        blocks: tuple[int, int] = (2, 8),
     ) -> None:
-        if not (0 < rtol < 1):
-            raise InputError("rtol", "between 0 and 1", rtol)
+        settings = TrackerSettings() if settings is None else settings
+        if not (0 < settings.rtol < 1):
+            raise InputError("rtol", "between 0 and 1", settings.rtol)
         self.products, self.nv = products, int(nv)
-        self.rtol, self.warm_products, self.jump = float(rtol), int(warm_products), float(jump)
-        self.max_products = int(max_products) if max_products else 400 + 4 * self.nv
+        self.rtol, self.jump = float(settings.rtol), float(settings.jump)
+        self.warm_products = int(settings.warm_products)
+        self.max_products = int(settings.max_products or 400 + 4 * self.nv)
         self.dense = dense
-        self._rng = np.random.default_rng(seed)
-        self._denoc = DenocEnds.of(products, self.nv, keep=(blocks[0], 2))
+        self._rng = np.random.default_rng(settings.seed)
+        blocks = settings.blocks
+        self._denoc = DenocEnds.of(products, self.nv, keep=(blocks[0], 2), seed=settings.seed)
         self._ends = (
             _End(products.gim_product, self.nv, blocks[0]),
             _End(products.gim_solve, self.nv, blocks[1]),
@@ -177,9 +194,10 @@ class KappaTracker:
         """The last sample's eigenvectors of λmax and of λmin (unit vectors)."""
         if self._denoc is not None and self._denoc.sampled:
             return self._denoc.eigenvectors()
-        if self._ends[0].block is None:
+        top, low = self._ends[0].block, self._ends[1].block
+        if top is None or low is None:
             raise ConditioningError("the κ tracker has not sampled yet")
-        return self._ends[0].block[-1].copy(), self._ends[1].block[-1].copy()
+        return top[-1].copy(), low[-1].copy()
 
     def _probe(self) -> np.ndarray:
         return self._rng.standard_normal(self.nv)
@@ -192,6 +210,7 @@ class KappaTracker:
         """
         q = np.asarray(q, dtype=float)
         try:
+            certified: bool | None
             if self._denoc is not None:
                 ends = self._denoc.sample(q, self)
                 factors, certified = ends.pop(), True
@@ -237,8 +256,9 @@ class KappaTracker:
         margin = CERTIFY * self.rtol
         above, below = top * (1.0 + margin), low * (1.0 - margin)
         inertia = getattr(self.products, "shifted_inertia", None)
-        if inertia is not None:
-            return 2, inertia(above)[1] == self.nv and inertia(below)[0] == self.nv
+        counts = None if inertia is None else inertia(above)
+        if inertia is not None and counts is not None:  # a provider may decline (None)
+            return 2, counts[1] == self.nv and inertia(below)[0] == self.nv
         if self.dense is None:
             return 0, None
         M = self.dense(q)
@@ -254,7 +274,7 @@ class KappaTracker:
 
     def _leading(self, end: _End, starts: list[np.ndarray], budget: int):
         block = np.empty((end.keep, self.nv))
-        theta, estimate, ok, used = leading_python(
+        theta, estimate, ok, used = leading_callable(
             end.apply,
             np.array(starts),
             end.workspace,
@@ -321,14 +341,16 @@ class KappaTracker:
         )
 
 
-def track_kappa(products, configurations: npt.ArrayLike, **options) -> list[TrackedKappa]:
+def track_kappa(
+    products, configurations: npt.ArrayLike, settings: TrackerSettings | None = None
+) -> list[TrackedKappa]:
     """κ₂ at every configuration (rows of ``configurations``), in order, warm-started.
 
     Args:
         products: See [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker].
         configurations: (samples, nq).
-        **options: Passed to [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker].
+        settings: See [`TrackerSettings`][gimwatch.metrics.tracker.TrackerSettings].
     """
     qs = np.atleast_2d(np.asarray(configurations, dtype=float))
-    tracker = KappaTracker(products, products.nv, **options)
+    tracker = KappaTracker(products, products.nv, settings)
     return [tracker.sample(q) for q in qs]

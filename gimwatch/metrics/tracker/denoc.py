@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from gimwatch.denoc import fused
+from gimwatch.denoc.lean import LeanModel
 from gimwatch.errors import ConditioningError
 from gimwatch.jit import njit
 from gimwatch.metrics.tracker.krylov import Workspace, leading
@@ -93,7 +94,7 @@ def _factor_with_margin(low, s, model):
 
 
 @njit(cache=True)
-def warm_sample(
+def warm_sample(  # noqa: PLR0913  # numba kernel: flat arrays
     q, geometry, model, starts_max, starts_min, probes, state, params, V, AV, H, vectors, stats
 ):
     """One warm sample in one call, both ends certified (see `DenocEnds.sample` for ``stats``).
@@ -196,11 +197,11 @@ class DenocEnds:
         self.sampled = False
 
     @classmethod
-    def of(cls, products, n: int, keep: tuple[int, int]) -> DenocEnds | None:
+    def of(cls, products, n: int, keep: tuple[int, int], seed: int = 0) -> DenocEnds | None:
         """The compiled ends for DeNOC's LeanModel; None for any other provider."""
-        if not hasattr(products, "compiled_model_arguments"):
+        if not isinstance(products, LeanModel):
             return None
-        return cls(products, n, keep)
+        return cls(products, n, keep, seed)
 
     def eigenvectors(self) -> tuple[np.ndarray, np.ndarray]:
         """The last sample's eigenvectors of λmax and of λmin."""

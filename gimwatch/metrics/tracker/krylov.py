@@ -13,11 +13,14 @@ bounds the relative error of θ. For A = (M − σ·1)⁻¹ (shift-invert, θ = 
 of λ = σ + 1/θ relative to λ is that bound divided by 1 + σθ, and the rule is applied to it:
 converged when ‖r‖² / (θ · gap · (1 + σθ)) ≤ rtol.
 
-The operator is either DeNOC's compiled products, called from inside the loop (no Python per
-product: ``which`` = 0 for M·x, 1 for (M − σ·1)⁻¹ y on the factor of
-`gimwatch.denoc.fused.factor_shifted`), or, for other providers, a Python callable
-([`leading_python`][gimwatch.metrics.tracker.krylov.leading_python]). Vectors are rows: ``V[j]`` is
-basis vector j, contiguous.
+The engine is one compiled step, [`advance`][gimwatch.metrics.tracker.krylov.advance], that asks
+its caller for each product (reverse communication, as ARPACK's):
+[`leading`][gimwatch.metrics.tracker.krylov.leading] drives it with DeNOC's compiled products
+inside one compiled call (no Python per product: ``which`` = 0 for M·x, 1 for (M − σ·1)⁻¹ y on
+the factor of `gimwatch.denoc.fused.factor_shifted`), and
+[`leading_callable`][gimwatch.metrics.tracker.krylov.leading_callable] with a Python callable (for
+other providers). Every matrix-free κ of gimwatch runs on it. Vectors are rows: ``V[j]`` is basis
+vector j, contiguous.
 """
 
 from __future__ import annotations
@@ -29,10 +32,20 @@ import numpy as np
 from gimwatch.denoc import fused
 from gimwatch.jit import njit
 
-__all__ = ["MAX_BASIS", "Workspace", "leading", "leading_python"]
+__all__ = [
+    "CHECK_EVERY",
+    "MAX_BASIS",
+    "STATE_SIZE",
+    "Workspace",
+    "advance",
+    "leading",
+    "leading_callable",
+]
 
 #: Largest Krylov basis before a thick restart.
 MAX_BASIS = 24
+#: Products between two Rayleigh–Ritz checks of `leading_callable` (one Python call each).
+CHECK_EVERY = 4
 
 
 class Workspace:
@@ -113,7 +126,7 @@ def _apply(which, x, out, model):
 
 
 @njit(cache=True)
-def _eigh(H, m):
+def _eigh(H, m):  # noqa: C901, PLR0912  # numba kernel: Jacobi sweeps in one loop nest
     """Eigen-decomposition of the symmetric H[:m, :m], ascending (cyclic Jacobi for m ≤ 12).
 
     Jacobi rotations until every off-diagonal entry is below 1e-17 of the Frobenius norm —
@@ -165,7 +178,7 @@ def _eigh(H, m):
 
 
 @njit(cache=True)
-def ritz_step(V, AV, H, m, keep, sigma, restart, residual, ritz_out):
+def ritz_step(V, AV, H, m, keep, sigma, restart, residual, ritz_out):  # noqa: PLR0913  # numba kernel
     """Rayleigh–Ritz on V[:m]: (θ, error estimate, basis size after an optional restart).
 
     Writes the residual r = A y − θ y of the leading Ritz pair (θ, y) into ``residual`` and
@@ -208,11 +221,73 @@ def ritz_step(V, AV, H, m, keep, sigma, restart, residual, ritz_out):
     return theta, estimate, m
 
 
+#: The engine's counters between two calls of `advance` (an int64 array of this length):
+#: phase (0 fresh, 1 a start vector's product pending, 2 a Lanczos product pending), basis size m,
+#: products used, start vectors read, products since the last check, converged (0 / 1).
+STATE_SIZE = 6
+
+
 @njit(cache=True)
-def leading(
+def advance(  # noqa: PLR0913  # numba kernel: flat arrays and scalars
+    state,
+    result,
+    starts,
+    count,
+    sigma,
+    rtol,
+    budget,
+    keep,
+    check_every,
+    V,
+    AV,
+    H,
+    vectors,
+    ritz_out,
+):
+    """One step of the engine; returns the row m whose product A V[m] it needs next, or −1.
+
+    Reverse communication (as ARPACK's): the caller writes A V[m] into AV[m] and calls again,
+    so that the one algorithm serves compiled operators (`leading`) and Python callables
+    (`leading_callable`). Start from ``state`` all zero; when it returns −1, ``result`` holds
+    (θ, error estimate) and ``state`` the products used (2) and whether it converged (5).
+    See `leading` for the other arguments.
+    """
+    phase, m, used, k, steps = state[0], state[1], state[2], state[3], state[4]
+    n, size = V.shape[1], V.shape[0]
+    residual, spare = vectors[1], vectors[2]
+    if phase != 0:  # the caller wrote A V[m] into AV[m]
+        _h_column(V, AV, H, m)
+        m, used, steps = m + 1, used + 1, steps + 1
+    if phase <= 1:  # the start block: one product per independent start vector
+        while k < count:
+            k += 1
+            if m < size and _orthonormalize_into(V, m, starts[k - 1], spare):
+                state[0], state[1], state[2], state[3], state[4] = 1, m, used, k, 0
+                return m
+    elif not (steps >= check_every or m == size or used >= budget):
+        if _orthonormalize_into(V, m, AV[m - 1], spare):  # the Lanczos sequence goes on
+            state[0], state[1], state[2], state[4] = 2, m, used, steps
+            return m
+    restart = m + check_every > size
+    theta, estimate, grown = ritz_step(V, AV, H, m, keep, sigma, restart, residual, ritz_out)
+    converged = m == n or (theta > 0 and estimate <= rtol)
+    result[0], result[1] = theta, estimate
+    state[1], state[2], state[5] = grown, used, 1 if converged else 0
+    if converged or used >= budget:
+        return -1
+    if grown >= n or not _orthonormalize_into(V, grown, residual, spare):
+        return -1  # the residual lies in the basis
+    state[0], state[3], state[4] = 2, k, 0  # Lanczos restarts from the residual
+    return grown
+
+
+@njit(cache=True)
+def leading(  # noqa: PLR0913  # numba kernel: flat arrays and scalars
     which, starts, count, sigma, rtol, budget, keep, check_every, V, AV, H, vectors, ritz_out, model
 ):
     """Leading eigenpair by thick-restart Lanczos from ``starts[:count]`` (module docstring).
+
+    The engine (`advance`) driven by DeNOC's compiled products, inside one compiled call.
 
     Args:
         which: 0 (M·x) or 1 ((M − σ·1)⁻¹ y) on DeNOC's configured model.
@@ -233,37 +308,19 @@ def leading(
     Returns:
         (θ, error estimate of λ (relative), converged, products used).
     """
-    n = starts.shape[1]
-    size = V.shape[0]
-    out, residual, spare = vectors[0], vectors[1], vectors[2]
-    m = used = 0
-    for k in range(count):
-        if m < size and _orthonormalize_into(V, m, starts[k], spare):
-            _apply(which, V[m], out, model)
-            AV[m] = out
-            _h_column(V, AV, H, m)
-            m += 1
-            used += 1
-    while True:
-        restart = m + check_every > size
-        theta, estimate, grown = ritz_step(V, AV, H, m, keep, sigma, restart, residual, ritz_out)
-        converged = m == n or (theta > 0 and estimate <= rtol)
-        if converged or used >= budget:
-            return theta, estimate, converged, used
-        m = grown
-        if m >= n or not _orthonormalize_into(V, m, residual, spare):
-            return theta, estimate, False, used  # the residual lies in the basis
-        for _ in range(check_every):
-            _apply(which, V[m], out, model)
-            AV[m] = out
-            used += 1
-            _h_column(V, AV, H, m)
-            m += 1
-            if m == size or used >= budget or not _orthonormalize_into(V, m, out, spare):
-                break
+    state = np.zeros(STATE_SIZE, dtype=np.int64)
+    result = np.zeros(2)
+    out = vectors[0]
+    args = (starts, count, sigma, rtol, budget, keep, check_every, V, AV, H, vectors, ritz_out)
+    m = advance(state, result, *args)
+    while m >= 0:
+        _apply(which, V[m], out, model)
+        AV[m] = out
+        m = advance(state, result, *args)
+    return result[0], result[1], state[5] == 1, state[2]
 
 
-def leading_python(
+def leading_callable(
     apply: Callable[[np.ndarray], np.ndarray],
     starts: np.ndarray,
     workspace: Workspace,
@@ -272,35 +329,20 @@ def leading_python(
     rtol: float,
     budget: int,
     keep: int,
-    check_every: int = 4,
 ) -> tuple[float, float, bool, int]:
-    """`leading` for an operator given as a Python callable (σ = 0).
+    """`leading` for an operator given as a Python callable (σ = 0, a check every 4 products).
 
-    Same algorithm and returns; for providers other than DeNOC's (Pinocchio's RNEA/ABA,
-    test operators), one Python call per product.
+    The same engine (`advance`), one Python call of ``apply`` per product: for providers
+    other than DeNOC's compiled model (Pinocchio's RNEA/ABA, S = D^-1/2 M D^-1/2, test
+    operators).
     """
     V, AV, H, vectors = workspace.arrays()
-    n, size = starts.shape[1], V.shape[0]
-    residual, spare = vectors[1], vectors[2]
-    m = used = 0
-    for start in starts:
-        if m < size and _orthonormalize_into(V, m, np.ascontiguousarray(start), spare):
-            AV[m] = apply(V[m].copy())
-            _h_column(V, AV, H, m)
-            m, used = m + 1, used + 1
-    while True:
-        restart = m + check_every > size
-        theta, estimate, grown = ritz_step(V, AV, H, m, keep, 0.0, restart, residual, ritz_out)
-        converged = m == n or (theta > 0 and estimate <= rtol)
-        if converged or used >= budget:
-            return float(theta), float(estimate), bool(converged), used
-        m = grown
-        if m >= n or not _orthonormalize_into(V, m, residual, spare):
-            return float(theta), float(estimate), False, used
-        for _ in range(check_every):
-            AV[m] = apply(V[m].copy())
-            used += 1
-            _h_column(V, AV, H, m)
-            m += 1
-            if m == size or used >= budget or not _orthonormalize_into(V, m, AV[m - 1], spare):
-                break
+    state = np.zeros(STATE_SIZE, dtype=np.int64)
+    result = np.zeros(2)
+    starts = np.ascontiguousarray(starts, dtype=float)
+    args = (starts, starts.shape[0], 0.0, rtol, budget, keep, CHECK_EVERY, V, AV, H, vectors)
+    m = advance(state, result, *args, ritz_out)
+    while m >= 0:
+        AV[m] = apply(V[m].copy())
+        m = advance(state, result, *args, ritz_out)
+    return float(result[0]), float(result[1]), bool(state[5] == 1), int(state[2])

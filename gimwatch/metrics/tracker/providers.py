@@ -6,8 +6,7 @@
 * [`gim_products`][gimwatch.metrics.tracker.providers.gim_products] — that model, or else
   [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts];
 * [`PinocchioProducts`][gimwatch.metrics.tracker.providers.PinocchioProducts] — ``M(q) x = RNEA(q,
-  0, x)`` and ``M(q)⁻¹ y = ABA(q, 0, y)`` with gravity off (see
-  [`gimwatch.metrics.matrix_free`][gimwatch.metrics.matrix_free]), behind the three methods
+  0, x)`` and ``M(q)⁻¹ y = ABA(q, 0, y)`` with gravity off, behind the three methods
   [`KappaTracker`][gimwatch.metrics.tracker.KappaTracker] calls (``configure(q)``,
   ``gim_product(x)``, ``gim_solve(y)``): for robots DeNOC does not read, or to check one
   implementation against the other. DeNOC's model is the cheaper provider: its products reuse the

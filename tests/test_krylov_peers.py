@@ -4,8 +4,8 @@ import pytest
 import scipy.linalg
 from closed_forms import straight_chain_extreme_eigenvalues
 
+from gimwatch.bench.krylov_peers import gim_inverse_operator, gim_operator, kappa_matrix_free
 from gimwatch.errors import InputError
-from gimwatch.metrics.matrix_free import gim_inverse_operator, gim_operator, kappa_matrix_free
 from gimwatch.model.inertia import gim
 from gimwatch.model.robots import load_robot, neutral_configuration, random_configurations
 

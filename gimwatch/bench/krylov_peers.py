@@ -1,6 +1,13 @@
-"""Matrix-free products with M(q) and M(q)⁻¹, and κ from their extreme eigenvalues.
+"""The Krylov engines the κ tracker replaced, kept as bench peers: ARPACK and plain Lanczos.
 
-Pinocchio never has to form M for these:
+Not metrics: every matrix-free κ of gimwatch runs on the κ tracker's Krylov engine
+([`gimwatch.metrics.tracker.krylov`][gimwatch.metrics.tracker.krylov]). This module keeps the
+engines used before it, so that the bench can time the tracker against them and the tests can
+check them against LAPACK: [`kappa_matrix_free`][gimwatch.bench.krylov_peers.kappa_matrix_free]
+(ARPACK on Pinocchio's RNEA/ABA, the watch's former ``kappa_lanczos``) and
+[`plain_lanczos_kappa`][gimwatch.bench.krylov_peers.plain_lanczos_kappa] (Lanczos without
+restarts on DeNOC's O(n) state, the O(n) path's former κ). Pinocchio never has to form M for
+these:
 
 * ``M(q) x = RNEA(q, v = 0, a = x)`` with gravity off (the inverse-dynamics torque of an
   acceleration ``x`` from rest), O(n) per product;
@@ -17,20 +24,48 @@ eigenvectors as ``start`` warm-starts a sweep.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
+import scipy.linalg
 from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
-from gimwatch.denoc.linear import MatrixFreeKappa
 from gimwatch.errors import ConditioningError, InputError
 from gimwatch.model.robots import Robot, as_configuration
 
 __all__ = [
+    "MatrixFreeKappa",
     "gim_inverse_operator",
     "gim_operator",
     "kappa_matrix_free",
+    "plain_lanczos_kappa",
 ]
+
+
+@dataclass(frozen=True)
+class MatrixFreeKappa:
+    """κ₂ of M(q) from a peer engine on x ↦ M x and x ↦ M⁻¹ x (M never formed).
+
+    Attributes:
+        kappa: λmax / λmin.
+        lambda_max: Largest eigenvalue of M.
+        lambda_min: Smallest eigenvalue of M (1 / the largest of M⁻¹).
+        products: O(n) products applied (M·x and M⁻¹·x together).
+        last_relative_change: Plain Lanczos: relative change of the Ritz values over the last
+            10 steps (below ``rtol`` when converged); NaN from ARPACK (it checks residuals).
+        vector_max: ARPACK: eigenvector of λmax, to warm-start a nearby sample (else None).
+        vector_min: ARPACK: eigenvector of λmin (else None).
+    """
+
+    kappa: float
+    lambda_max: float
+    lambda_min: float
+    products: int
+    last_relative_change: float = float("nan")
+    vector_max: np.ndarray | None = field(default=None, repr=False)
+    vector_min: np.ndarray | None = field(default=None, repr=False)
 
 
 def _zero_gravity_model(robot: Robot) -> pin.Model:
@@ -125,8 +160,8 @@ def kappa_matrix_free(
         start: ``(vector_max, vector_min)`` of a previous, nearby sample to warm-start from.
 
     Returns:
-        The [`MatrixFreeKappa`][gimwatch.denoc.MatrixFreeKappa] record, with the eigenvectors for
-        the next warm start.
+        The [`MatrixFreeKappa`][gimwatch.bench.krylov_peers.MatrixFreeKappa] record, with the
+        eigenvectors for the next warm start.
     """
     q = as_configuration(robot, q)
     if not (np.isfinite(tol) and tol >= 0):
@@ -156,4 +191,75 @@ def kappa_matrix_free(
         products=forward.counter.count + inverse.counter.count,
         vector_max=vector_max,
         vector_min=vector_min,
+    )
+
+
+def _largest_ritz_value(apply, start: np.ndarray, *, rtol: float, max_steps: int):
+    """Largest eigenvalue of a symmetric operator by plain Lanczos, O(n) memory.
+
+    No restarts: the smallest eigenvalues of a long chain's M are clustered (relative gaps
+    ~1/n²), where restarted ARPACK (``eigsh``) needs 10^4–10^5 products at n = 10^4 while
+    the largest Ritz value itself settles in a few hundred steps. No reorthogonalisation
+    either: losing orthogonality only adds spurious copies of converged Ritz values, never
+    moves the extreme one, and keeping the basis would cost O(n·steps) memory. Stops when
+    the largest Ritz value changes by less than ``rtol`` (relative) over 10 steps.
+
+    Returns:
+        (Ritz value, steps taken, its relative change over the last 10 steps).
+    """
+    v = start / np.linalg.norm(start)
+    v_previous = np.zeros_like(v)
+    alphas: list[float] = []
+    betas: list[float] = []
+    beta = 0.0
+    previous = np.nan
+    steps = min(max_steps, start.size)
+    for k in range(steps):
+        w = apply(v) - beta * v_previous
+        alpha = float(w @ v)
+        w -= alpha * v
+        alphas.append(alpha)
+        beta = float(np.linalg.norm(w))
+        exhausted = beta <= 1e-14 * max(abs(a) for a in alphas) or k == steps - 1
+        if k % 10 == 9 or exhausted:
+            theta = scipy.linalg.eigh_tridiagonal(
+                np.array(alphas),
+                np.array(betas),
+                eigvals_only=True,
+                select="i",
+                select_range=(k, k),
+            )[0]
+            change = abs(theta - previous) / abs(theta)
+            if exhausted or change <= rtol:
+                return float(theta), k + 1, float(change) if k >= 10 else 0.0
+            previous = theta
+        betas.append(beta)
+        v_previous, v = v, w / beta
+    raise AssertionError("unreachable")  # the loop returns at its last step
+
+
+def plain_lanczos_kappa(
+    state, *, seed: int = 0, rtol: float = 1e-10, max_steps: int = 3000
+) -> MatrixFreeKappa:
+    """κ₂ of a DeNOC state by plain Lanczos on ``matvec`` and ``solve``.
+
+    The O(n) path's κ before the tracker's engine served it: one seeded random start for both
+    ends, each stopped when its largest Ritz value changes by less than ``rtol`` over 10 steps
+    (no certificate; a lower bound of κ that converges to it).
+    """
+    start = np.random.default_rng(seed).standard_normal(state.model.nv)
+    top, steps_max, change_max = _largest_ritz_value(
+        state.matvec, start, rtol=rtol, max_steps=max_steps
+    )
+    inverse, steps_min, change_min = _largest_ritz_value(
+        state.solve, start, rtol=rtol, max_steps=max_steps
+    )
+    if not (top > 0 and inverse > 0):
+        raise ConditioningError("the GIM must be positive definite (Lanczos found λ <= 0)")
+    return MatrixFreeKappa(
+        kappa=float(top * inverse),
+        lambda_max=float(top),
+        lambda_min=float(1.0 / inverse),
+        products=steps_max + steps_min,
+        last_relative_change=max(change_max, change_min),
     )
