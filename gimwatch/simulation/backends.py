@@ -26,6 +26,7 @@ import scipy.linalg
 
 from gimwatch.errors import BackendWarning
 from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.mass_matrix_source import GUARANTEED, MassMatrixSource
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 
 __all__ = ["BACKENDS", "Backend", "make_backend", "model_with_gravity"]
@@ -39,13 +40,21 @@ def model_with_gravity(robot: Robot, gravity: np.ndarray | None) -> pin.Model:
     return model
 
 
-class Backend:
-    """Forward dynamics of one robot under one gravity vector."""
+class Backend(MassMatrixSource):
+    """Forward dynamics of one robot under one gravity vector; a source of its M(q) too.
+
+    A backend is the [`MassMatrixSource`][gimwatch.model.mass_matrix_source.MassMatrixSource] a
+    simulation hands its watch: q comes from the integrator (not checked again) and M is
+    positive definite by construction (the robot's masses were checked when it was loaded).
+    """
 
     name: ClassVar[str]
+    check_q = False
+    definiteness = GUARANTEED
 
     def __init__(self, robot: Robot, gravity: np.ndarray | None) -> None:
         self.robot = robot
+        self.nv, self.dof_names = robot.nv, robot.dof_names
         self.gravity = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -133,6 +142,10 @@ class DenocBackend(Backend):
 
     def gim(self, q):
         return self.denoc.gim(q)
+
+    def lean_model(self):
+        """The compiled model of the forward dynamics: the watch's diag M and δ too."""
+        return self.lean
 
     def gim_diagonal(self, q):
         return self.lean.gim_diagonal(np.asarray(q, dtype=float))
