@@ -25,6 +25,7 @@ from gimwatch.model.inertia import gim, gim_diagonal
 from gimwatch.model.mass_matrix_source import (
     CHECK_ONCE,
     GUARANTEED,
+    Configuration,
     LinearState,
     MassMatrixSource,
 )
@@ -53,6 +54,8 @@ class PinocchioSource(MassMatrixSource):
             above `DATA_NV_LIMIT`, where diag M still comes without one).
     """
 
+    robot: Robot
+
     def __init__(self, robot: Robot, data: pin.Data | None = None) -> None:
         self.robot = robot
         self.nv, self.dof_names = robot.nv, robot.dof_names
@@ -69,16 +72,16 @@ class PinocchioSource(MassMatrixSource):
             self.data = self.robot.new_data()
         return self.data
 
-    def gim(self, q: np.ndarray | None) -> np.ndarray:
+    def gim(self, q: Configuration) -> np.ndarray:
         """M(q), checked q, from CRBA (symmetric copy)."""
         return gim(self.robot, q, data=self._data())
 
-    def gim_into(self, q: np.ndarray | None, out: np.ndarray) -> np.ndarray:
+    def gim_into(self, q: Configuration, out: np.ndarray) -> np.ndarray:
         """CRBA's M in the Data (upper triangle filled): q is already checked by the watch."""
         data = self.data if self.data is not None else self._data()
         return pin.crba(self.robot.model, data, q)
 
-    def gim_diagonal(self, q: np.ndarray | None) -> np.ndarray:
+    def gim_diagonal(self, q: Configuration) -> np.ndarray:
         """Diag M(q): CRBA's diagonal for small robots, else O(n) composite inertias."""
         if self.nv <= CRBA_DIAGONAL_MAX_NV:  # C++ CRBA beats the O(n) map in Python here
             q = as_configuration(self.robot, q)
@@ -101,14 +104,15 @@ class DenocDiagonal(MassMatrixSource):
         self.inner, self.lean = inner, lean
         self.nv, self.dof_names, self.robot = inner.nv, inner.dof_names, inner.robot
         self.check_q = inner.check_q  # type: ignore[misc]  # the inner source's rule
-        self.gim_diagonal = lean.gim_diagonal  # one compiled call, buffers kept
-        self.diagonal_ratio = lean.diagonal_ratio
+        # bound once, so that a sample makes one call into the compiled model, not two
+        self.gim_diagonal = lean.gim_diagonal  # type: ignore[method-assign]
+        self.diagonal_ratio = lean.diagonal_ratio  # type: ignore[method-assign]
 
-    def gim(self, q: np.ndarray | None) -> np.ndarray:
+    def gim(self, q: Configuration) -> np.ndarray:
         """M(q) from the inner source."""
         return self.inner.gim(q)
 
-    def gim_into(self, q: np.ndarray | None, out: np.ndarray) -> np.ndarray:
+    def gim_into(self, q: Configuration, out: np.ndarray) -> np.ndarray:
         """M(q) from the inner source, into ``out`` when it can."""
         return self.inner.gim_into(q, out)
 
@@ -133,21 +137,21 @@ class DenocLinear(MassMatrixSource):
     def __init__(self, model: Any) -> None:
         self.model = model
         self.nv, self.dof_names = model.nv, tuple(model.dof_names)
-        self._q: np.ndarray | None = None
+        self._q: Configuration = None
         self._state: LinearState | None = None
 
-    def gim(self, q: np.ndarray | None) -> np.ndarray:
+    def gim(self, q: Configuration) -> np.ndarray:
         """Refused: the O(n) path never forms M."""
         raise ConditioningError("this metric needs M itself, which the O(n) path never forms")
 
-    def linear_state(self, q: np.ndarray | None) -> LinearState:
+    def linear_state(self, q: Configuration) -> LinearState:
         """The model's state at q, kept while q is the same configuration."""
         if self._state is None or self._q is None or not np.array_equal(q, self._q):
             self._state = self.model.state(q)
             self._q = np.array(q, dtype=float)
         return self._state
 
-    def gim_diagonal(self, q: np.ndarray | None) -> np.ndarray:
+    def gim_diagonal(self, q: Configuration) -> np.ndarray:
         """Diag M(q) from the linear state, in public order."""
         return self.to_public(self.linear_state(q).diagonal())
 

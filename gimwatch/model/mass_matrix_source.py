@@ -2,7 +2,7 @@
 
 A source gives ``nv``, ``dof_names``, ``gim(q)`` (M) and ``gim_diagonal(q)`` (diag M), and
 declares the faster paths it has, each with a default meaning "not offered", so that
-[`GimState`][gimwatch.metrics.registry.GimState] and the watch dispatch to what a source
+`GimState` (the metric registry) and the watch dispatch to what a source
 declares instead of probing it attribute by attribute:
 
 * ``gim_into(q, out)`` — M written into a buffer the caller keeps (MuJoCo's ``mj_fullM``);
@@ -28,7 +28,7 @@ This module imports no Pinocchio: it sits low in the house, under every implemen
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, Any, ClassVar, Literal, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
@@ -39,7 +39,7 @@ __all__ = [
     "CHECK_EVERY_SAMPLE",
     "CHECK_ONCE",
     "GUARANTEED",
-    "Definiteness",
+    "Configuration",
     "LinearState",
     "MassMatrixSource",
 ]
@@ -50,7 +50,9 @@ GUARANTEED = "guaranteed"
 CHECK_ONCE = "check_once"
 #: M may lose definiteness between samples (MuJoCo's negative ``dof_armature``): every sample.
 CHECK_EVERY_SAMPLE = "check_every_sample"
-Definiteness = Literal["guaranteed", "check_once", "check_every_sample"]
+#: A configuration in the source's own layout (a robot's q, MuJoCo's qpos), or None when the
+#: source reads the M it holds.
+Configuration = Any
 
 
 class LinearState(Protocol):
@@ -90,27 +92,27 @@ class MassMatrixSource(ABC):
     #: Whether the watch checks each q against `robot` (False: q comes from a simulation).
     check_q: ClassVar[bool] = True
     #: Whether a watch that never forms M checks it positive definite, and how often.
-    definiteness: Definiteness = CHECK_ONCE
+    definiteness: str = CHECK_ONCE
     #: The robot whose RNEA/ABA operator metrics run, and whose q the watch checks.
     robot: Robot | None = None
 
     @abstractmethod
-    def gim(self, q: np.ndarray | None) -> np.ndarray:
+    def gim(self, q: Configuration) -> np.ndarray:
         """M(q), shape (nv, nv), symmetric."""
 
-    def gim_into(self, q: np.ndarray | None, out: np.ndarray) -> np.ndarray:
+    def gim_into(self, q: Configuration, out: np.ndarray) -> np.ndarray:
         """M(q) for the watch's compiled path, written into ``out`` when the source can."""
         return self.gim(q)
 
-    def gim_diagonal(self, q: np.ndarray | None) -> np.ndarray:
+    def gim_diagonal(self, q: Configuration) -> np.ndarray:
         """Diag M(q), length nv (default: read off ``gim(q)``; override to skip forming M)."""
         return np.diag(self.gim(q)).copy()
 
-    def diagonal_ratio(self, q: np.ndarray | None) -> float | None:
+    def diagonal_ratio(self, q: Configuration) -> float | None:
         """δ = max M_ii / min M_ii in one call (NaN when diag M is bad), or None: not offered."""
         return None
 
-    def linear_state(self, q: np.ndarray | None) -> LinearState | None:
+    def linear_state(self, q: Configuration) -> LinearState | None:
         """The O(n) state of M at q (M never formed), or None: not offered."""
         return None
 

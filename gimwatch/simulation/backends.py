@@ -26,7 +26,7 @@ import scipy.linalg
 
 from gimwatch.errors import BackendWarning
 from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.mass_matrix_source import GUARANTEED, MassMatrixSource
+from gimwatch.model.mass_matrix_source import GUARANTEED, Configuration, MassMatrixSource
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 
 __all__ = ["BACKENDS", "Backend", "make_backend", "model_with_gravity"]
@@ -49,6 +49,7 @@ class Backend(MassMatrixSource):
     """
 
     name: ClassVar[str]
+    robot: Robot
     check_q = False
     definiteness = GUARANTEED
 
@@ -69,11 +70,11 @@ class Backend(MassMatrixSource):
             self.data = self.robot.new_data()
         return self.model, self.data
 
-    def gim(self, q: np.ndarray) -> np.ndarray:
+    def gim(self, q: Configuration) -> np.ndarray:
         """M(q), from Pinocchio's CRBA."""
         return gim(self.robot, q, data=self._pinocchio()[1])
 
-    def gim_diagonal(self, q: np.ndarray) -> np.ndarray:
+    def gim_diagonal(self, q: Configuration) -> np.ndarray:
         """Diag M(q) in O(n), from Pinocchio's composite inertias."""
         return gim_diagonal(self.robot, q, data=self._pinocchio()[1])
 

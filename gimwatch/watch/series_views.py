@@ -7,6 +7,7 @@ reads the recorded series and the watched metrics it was given; nothing is compu
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from gimwatch.errors import InputError
 from gimwatch.metrics.registry import Metric
@@ -100,7 +101,7 @@ class SeriesViews:
             severity = self.metrics[alarm_metric].severity
             if severity(alarm_threshold) == alarm_threshold:
                 threshold = alarm_threshold
-        series = {name: self.array(name) for name in chosen}
+        series: dict[str, npt.ArrayLike] = {name: self.array(name) for name in chosen}
         return plot_watch(
             self.array("t"), series, alarm_metric=alarm_metric, threshold=threshold, ax=ax
         )

@@ -31,6 +31,8 @@ coupling blocks of M differ.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
@@ -128,7 +130,7 @@ class GivenMatrix(MassMatrixSource):
         self.dof_names = tuple(str(n) for n in names)
         self._M: np.ndarray | None = None
         self._diag: np.ndarray | None = None
-        self._positive_ratio = None  # numba's kernel, imported by the first δ asked for
+        self._positive_ratio: Any = None  # numba's kernel, imported by the first δ asked for
 
     def hold_matrix(self, matrix: npt.ArrayLike) -> None:
         """Hold M for the next sample; checks it is real, of shape (nv, nv), finite, symmetric.
@@ -173,7 +175,9 @@ class GivenMatrix(MassMatrixSource):
 
     def gim_diagonal(self, q=None) -> np.ndarray:
         """The held diag M (or the diagonal of the held M)."""
-        return np.diag(self._M).copy() if self._diag is None else self._diag
+        if self._diag is not None:
+            return self._diag
+        return np.diag(self.gim()).copy()
 
 
 class MujocoSource(MassMatrixSource):

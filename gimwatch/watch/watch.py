@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -87,11 +87,12 @@ def _watch_source(
         raise InputError(
             "source", "a MassMatrixSource (gimwatch.model.mass_matrix_source)", type_name(source)
         )
-    if source is None and robot is None:
-        raise InputError("robot", "a gimwatch Robot (or a source giving nv)", None)
-    if source is None:  # Pinocchio's Data (memory ∝ nv³) unless DeNOC serves diag M alone
-        needs_data = bool(names) and (full or robot.nv <= DATA_NV_LIMIT)  # type: ignore[union-attr]
-        return PinocchioSource(robot, robot.new_data() if needs_data else None)  # type: ignore[arg-type,union-attr]
+    if source is None:
+        if robot is None:
+            raise InputError("robot", "a gimwatch Robot (or a source giving nv)", None)
+        # Pinocchio's Data (memory ∝ nv³) unless DeNOC serves diag M alone
+        needs_data = bool(names) and (full or robot.nv <= DATA_NV_LIMIT)
+        return PinocchioSource(robot, robot.new_data() if needs_data else None)
     for name in OPERATOR_METRICS.intersection(names) if source.robot is None else ():
         raise InputError(
             f"metric {name!r}",
@@ -170,7 +171,7 @@ class Watch:
         self._given: tuple[GivenMatrix, CompiledSampler | None] | None = None
         robot = self.source.robot
         checks_q = robot is not None and self.source.check_q
-        self._blocks = (*unit_blocks(robot), robot.nq) if checks_q else None  # type: ignore[union-attr]
+        self._blocks = (*unit_blocks(robot), robot.nq) if robot and checks_q else None
 
     @property
     def robot(self) -> Robot | None:
@@ -279,6 +280,7 @@ class Watch:
         t = _time(t)
         if self._blocks is not None:
             q = self._configuration(q)
+        q = cast("np.ndarray | None", q)  # checked, or in the source's own layout
         sampler = self._sampler if self._checked else None
         values = None if sampler is None else sampler.values(q)
         if values is None:
@@ -335,7 +337,7 @@ class Watch:
         The compiled path only reads q, so a good float vector is not copied; anything else
         goes through `as_configuration` (a checked copy, or the error naming the fault).
         """
-        stops, sizes, _, nq = self._blocks  # type: ignore[misc]
+        stops, sizes, _, nq = self._blocks  # type: ignore[misc]  # set when q is checked
         sampler = self._sampler
         if (
             sampler is not None
@@ -345,7 +347,7 @@ class Watch:
             and sampler.kernels.unit_block_fault(q, stops, sizes, UNIT_NORM_TOLERANCE) == -1
         ):
             return q
-        return as_configuration(self.robot, q)
+        return as_configuration(self.robot, q)  # type: ignore[arg-type]  # _blocks: a robot
 
     def _checked_values(self, state: GimState, q) -> list:
         """Every metric through the checked state; M > 0 checked as the source declares.
