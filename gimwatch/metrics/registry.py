@@ -183,11 +183,16 @@ class GimState:
 
 
 class Metric:
-    """One watched quantity. ``full``: needs M (not only its diagonal)."""
+    """One watched quantity.
+
+    ``full``: needs M (not only its diagonal); ``vector``: one value per coordinate;
+    ``needs_robot``: runs the robot's RNEA/ABA at q, so it needs a robot and a configuration.
+    """
 
     name: ClassVar[str]
     full: ClassVar[bool] = True
     vector: ClassVar[bool] = False
+    needs_robot: ClassVar[bool] = False
 
     def __call__(self, state: GimState):
         """The metric's value at the state's configuration."""
@@ -234,6 +239,7 @@ class KappaEquilibratedTracked(Metric):
 
     name = "kappa_equilibrated_tracked"
     full = False
+    needs_robot = True
 
     def __init__(self) -> None:
         self.tracker = None
@@ -258,6 +264,7 @@ class KappaLanczos(Metric):
 
     name = "kappa_lanczos"
     full = False
+    needs_robot = True
     TOL: ClassVar[float] = 1e-3
 
     def __init__(self) -> None:
@@ -294,6 +301,7 @@ class KappaTracked(Metric):
 
     name = "kappa_tracked"
     full = False
+    needs_robot = True
 
     def __init__(self) -> None:
         self.tracker = None
@@ -420,6 +428,7 @@ class StabilityMargin(Metric):
     """
 
     name = "stability_margin"
+    needs_robot = True
 
     def __init__(self) -> None:
         self.servos = None

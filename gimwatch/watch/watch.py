@@ -25,7 +25,7 @@ from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import ldlt_pivots
 from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.mass_matrix_sources import PinocchioSource, diagonal_source
-from gimwatch.metrics.registry import METRICS, GimState
+from gimwatch.metrics.registry import METRICS, GimState, Metric
 from gimwatch.model.mass_matrix_source import (
     CHECK_EVERY_SAMPLE,
     CHECK_ONCE,
@@ -58,10 +58,8 @@ __all__ = [
 
 #: Watched when a constructor is given no metric names: κ (Eq. 6) and δ (Sec. 4).
 DEFAULT_METRICS = ("kappa", "diagonal_ratio")
-#: Metrics that run the robot's RNEA/ABA at q: they need a robot and a configuration, not M.
-OPERATOR_METRICS = frozenset(
-    {"kappa_lanczos", "kappa_tracked", "kappa_equilibrated_tracked", "stability_margin"}
-)
+#: Metrics that run the robot's RNEA/ABA at q (they declare ``needs_robot``): not M alone.
+OPERATOR_METRICS = frozenset(name for name, cls in METRICS.items() if cls.needs_robot)
 
 
 def _metric_names(metrics) -> tuple[str, ...]:
@@ -73,7 +71,7 @@ def _metric_names(metrics) -> tuple[str, ...]:
 
 
 def _watch_source(
-    robot: Robot | None, source: MassMatrixSource | None, names: tuple[str, ...], full: bool
+    robot: Robot | None, source: MassMatrixSource | None, metrics: dict[str, Metric], full: bool
 ) -> MassMatrixSource:
     """The one source a watch samples: the given one, or Pinocchio's CRBA on ``robot``."""
     if robot is not None and not isinstance(robot, Robot):
@@ -91,9 +89,9 @@ def _watch_source(
         if robot is None:
             raise InputError("robot", "a gimwatch Robot (or a source giving nv)", None)
         # Pinocchio's Data (memory ∝ nv³) unless DeNOC serves diag M alone
-        needs_data = bool(names) and (full or robot.nv <= DATA_NV_LIMIT)
+        needs_data = bool(metrics) and (full or robot.nv <= DATA_NV_LIMIT)
         return PinocchioSource(robot, robot.new_data() if needs_data else None)
-    for name in OPERATOR_METRICS.intersection(names) if source.robot is None else ():
+    for name in (n for n, m in metrics.items() if m.needs_robot and source.robot is None):
         raise InputError(
             f"metric {name!r}",
             "watched on a robot (it runs RNEA/ABA at q)",
@@ -155,7 +153,7 @@ class Watch:
         names = _metric_names(metrics)
         self.metrics = {name: METRICS[name]() for name in names}
         self.full = any(m.full for m in self.metrics.values())
-        source = _watch_source(robot, source, names, self.full)
+        source = _watch_source(robot, source, self.metrics, self.full)
         # diag M and δ by one compiled DeNOC call when M itself is not needed
         self.source = diagonal_source(source) if names and not self.full else source
         self._set_alarm(alarm_metric, alarm_threshold, on_alarm, warn)
@@ -318,7 +316,7 @@ class Watch:
 
     def _hold(self) -> tuple[GivenMatrix, CompiledSampler | None]:
         """The watch's matrix in hand and its compiled path (the watch's own for a matrix watch)."""
-        for name in OPERATOR_METRICS.intersection(self.metrics):
+        for name in (n for n, m in self.metrics.items() if m.needs_robot):
             raise InputError(
                 f"metric {name!r}", "sampled with q (it runs RNEA/ABA at q)", "a matrix sample"
             )
@@ -406,37 +404,16 @@ class Watch:
         return self._views.array(name)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """The series as arrays, keyed ``watch_<metric>`` plus ``watch_t``.
-
-        A metric's per-sample records come beside its values as ``watch_<metric>_<record>``
-        (``kappa_tracked``: ``fallback`` and ``error_estimate``).
-        """
+        """The series as arrays: ``watch_t``, ``watch_<metric>`` and each metric's records."""
         return self._views.arrays()
 
     def to_dataframe(self):
-        """The series as a pandas DataFrame: ``t`` and one column per scalar metric.
-
-        Vector metrics (``eigenvalues``, ``diagonal``) are spread into ``<metric>:<k>``.
-        Needs pandas (``pip install 'gimwatch[pandas]'``).
-        """
+        """The series as a pandas DataFrame (see `SeriesViews.to_dataframe`)."""
         return self._views.to_dataframe()
 
     def plot(self, metrics: tuple[str, ...] | None = None, *, ax=None):
-        """The watched scalar metrics over time on a log axis, with the alarm threshold.
-
-        For the own-loop case, the figure a results folder has for ``simulate``
-        (`gimwatch.output.figures.plot_watch`). Vector metrics (eigenvalues, diagonal)
-        are left out.
-
-        Args:
-            metrics: Which watched metrics (default: every scalar one).
-            ax: Matplotlib Axes to draw on (a new figure's when None).
-
-        Returns:
-            The Axes.
-        """
-        alarm = (self.alarm_metric, self.alarm_threshold)
-        return self._views.plot(metrics, ax=ax, alarm=alarm)
+        """The watched scalar metrics over time, with the alarm threshold (`SeriesViews.plot`)."""
+        return self._views.plot(metrics, ax=ax, alarm=(self.alarm_metric, self.alarm_threshold))
 
     def __repr__(self) -> str:
         """One line: the robot, the metrics, the samples taken and the alarm."""
