@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -266,7 +266,7 @@ class Watch:
         """
         if not self.metrics:
             return None
-        if isinstance(self.source, GivenMatrix):  # M is handed in, never computed at q
+        if type(self.source) is GivenMatrix:  # M is handed in, never computed at q
             raise InputError(
                 "sample(t, q)",
                 "used on a watch of a robot or a MuJoCo pair",
@@ -276,13 +276,11 @@ class Watch:
         if q is None and not self.source.reads_state:
             raise InputError("q", "given (a configuration of the robot)", None)
         t = _time(t)
-        if self._blocks is not None:
-            q = self._configuration(q)
-        q = cast("np.ndarray | None", q)  # checked, or in the source's own layout
-        sampler = self._sampler if self._checked else None
-        values = None if sampler is None else sampler.values(q)
+        point: Any = q if self._blocks is None else self._configuration(q)
+        sampler = self._sampler
+        values = sampler.values(point) if self._checked and sampler is not None else None
         if values is None:
-            values = self._checked_values(GimState(self.source, q, full=self.full), q)
+            values = self._checked_values(GimState(self.source, point, full=self.full), point)
         return self._record(t, values)
 
     def sample_matrix(self, t: float, M: npt.ArrayLike) -> Alarm | None:
