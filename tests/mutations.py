@@ -207,7 +207,7 @@ MUTANTS = (
     ),
     Mutant(
         "spectrum-solver-unscaled",
-        "gimwatch/model/spectrum_solver.py",
+        "gimwatch/watch/spectrum_solver.py",
         "M = M * (1.0 / scale)",
         "M = M * scale",
         ("tests/test_spectrum_solver.py",),

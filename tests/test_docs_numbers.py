@@ -1253,7 +1253,7 @@ def test_watch_page_quotes_the_committed_watch_overhead_run():
         rf"{ratio('g1', 'mujoco', 'kappa', 'watch_vs_step')} `mj_step`s",
     )
     solver = {int(r["n"]): r for r in _csv("watch_overhead/watch_solver.csv")}
-    from gimwatch.model.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV
+    from gimwatch.watch.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV
 
     first, last = COMPILED_MAX_NV + 1, UNBLOCKED_MAX_NV
     assert solver[first]["solver"] == "dsyevd, minimal workspace" == solver[last]["solver"]

@@ -21,6 +21,7 @@ from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.metrics.tracker import KappaTracker, PinocchioProducts
 from gimwatch.model.inertia import gim_diagonal
 from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.watch.sources import GivenMatrix
 
 UNITS = Path(__file__).parent / "data" / "units"
 EPS = np.finfo(float).eps
@@ -34,7 +35,9 @@ def _kappa_s(M: np.ndarray) -> float:
 
 
 def _kappa_s_of(M: np.ndarray) -> float:
-    return evaluate(("kappa_equilibrated",), GimState(full=True, matrix=M))["kappa_equilibrated"]
+    return evaluate(("kappa_equilibrated",), GimState(GivenMatrix(len(M)), full=True, matrix=M))[
+        "kappa_equilibrated"
+    ]
 
 
 @pytest.mark.parametrize(

@@ -15,8 +15,10 @@ import pinocchio as pin
 import pytest
 
 from gimwatch.denoc import DenocModel
+from gimwatch.metrics.mass_matrix_sources import DenocLinear, PinocchioSource
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
 from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.watch.sources import GivenMatrix
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -39,16 +41,15 @@ def test_every_provider_gives_the_reference_values(name):
     q = random_configurations(robot, 1, seed=3)[0]
     M = pin.crba(robot.model, robot.model.createData(), q)
     reference = _references(M)
-    crba = GimState(robot, robot.new_data(), q, full=True)
-    given = GimState(full=True, matrix=M)
+    crba = GimState(PinocchioSource(robot, robot.new_data()), q, full=True)
+    given = GimState(GivenMatrix(robot.nv), full=True, matrix=M)
     for state in (crba, given):
         got = evaluate(tuple(reference), state)
         for key, value in reference.items():
             assert got[key] == pytest.approx(value, rel=1e-10), key
     model = DenocModel.from_urdf(robot.urdf_xml, source=robot.source, joint_order=robot.joint_names)
-    linear = GimState(
-        linear=model.state(q), lanczos=(0, 1e-12), to_public=model.to_public
-    )  # no M: diag, pivots and κ by O(n) recursions and Lanczos
+    # no M: diag, pivots and κ by O(n) recursions and Lanczos
+    linear = GimState(DenocLinear(model), q, lanczos=(0, 1e-12))
     got = evaluate(("kappa", "diagonal_ratio", "pivot_ratio_backward"), linear)
     assert got["kappa"] == pytest.approx(reference["kappa"], rel=1e-9)
     assert got["diagonal_ratio"] == pytest.approx(reference["diagonal_ratio"], rel=1e-12)
@@ -58,7 +59,7 @@ def test_every_provider_gives_the_reference_values(name):
 def test_the_o_n_path_refuses_metrics_that_need_m():
     robot = load_robot("chain:5")
     model = DenocModel.from_urdf(robot.urdf_xml, source=robot.source, joint_order=robot.joint_names)
-    state = GimState(linear=model.state(np.zeros(5)), to_public=model.to_public)
+    state = GimState(DenocLinear(model), np.zeros(5))
     with pytest.raises(Exception, match="never forms"):
         evaluate(("pivot_ratio_forward",), state)
 
@@ -75,7 +76,10 @@ def test_each_state_quantity_is_computed_once(monkeypatch):
 
     monkeypatch.setattr(conditioning, "eigenvalues", counting)
     M = np.diag([4.0, 2.0, 1.0]) + 0.1
-    evaluate(("kappa", "eigenvalues", "scaled_diagonal_ratio"), GimState(full=True, matrix=M))
+    evaluate(
+        ("kappa", "eigenvalues", "scaled_diagonal_ratio"),
+        GimState(GivenMatrix(3), full=True, matrix=M),
+    )
     assert calls["eig"] == 1
 
 
@@ -111,7 +115,7 @@ def test_kappa_tracked_records_fallbacks_and_falls_back_to_dense():
     metric = METRICS["kappa_tracked"]()
     qs = random_configurations(robot, 4, seed=3)
     for i, q in enumerate(qs):
-        state = GimState(robot, data, q)
+        state = GimState(PinocchioSource(robot, data), q)
         if i == 2:  # the O(n) solve fails (e.g. M not positive definite to its products)
             metric.tracker.sample = _failing(metric.tracker)
         kappa = metric(state)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from gimwatch.model.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV, SpectrumSolver
+from gimwatch.watch.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV, SpectrumSolver
 
 #: One size on each side of each switch of solver, and a robot-sized one.
 SIZES = (7, COMPILED_MAX_NV, COMPILED_MAX_NV + 1, UNBLOCKED_MAX_NV, UNBLOCKED_MAX_NV + 1, 140)

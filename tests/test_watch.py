@@ -65,7 +65,7 @@ def test_metric_registry_is_the_scene_vocabulary():
 @pytest.fixture
 def counters(monkeypatch):
     counts = {"eig": 0, "crba": 0, "diag": 0}
-    from gimwatch.model import kernels
+    from gimwatch.watch import kernels
 
     for kernel in (
         kernels.scaled_spectrum,

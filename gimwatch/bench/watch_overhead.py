@@ -18,7 +18,7 @@ A second table (``watch_tracker``): on the paper's rod chains of n links moved s
 to say from which n the tracker pays.
 
 A third table (``watch_solver``): the watch's dense eigen-solve
-([`SpectrumSolver`][gimwatch.model.spectrum_solver.SpectrumSolver]) against NumPy's
+([`SpectrumSolver`][gimwatch.watch.spectrum_solver.SpectrumSolver]) against NumPy's
 ``eigvalsh`` on one symmetric positive definite matrix per size, across the sizes where the
 solver changes (the numba kernel, ``dsyevd`` with its minimal then its optimal workspace).
 
@@ -39,7 +39,7 @@ from gimwatch.bench.report import markdown_table
 from gimwatch.metrics.tracker.providers import lean_model
 from gimwatch.model.mujoco_model import compile_robot
 from gimwatch.model.robots import load_robot
-from gimwatch.model.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV, SpectrumSolver
+from gimwatch.watch.spectrum_solver import COMPILED_MAX_NV, UNBLOCKED_MAX_NV, SpectrumSolver
 from gimwatch.watch.watch import Watch
 
 __all__ = [

@@ -39,6 +39,7 @@ from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, parse_chain_spec
 from gimwatch.model.sampling import is_real_limit
 from gimwatch.suggest import did_you_mean
 from gimwatch.survey.sweep import Task, run_sweep
+from gimwatch.watch.sources import GivenMatrix
 
 __all__ = [
     "CHUNK_POINTS",
@@ -173,7 +174,7 @@ def _dense_metrics(robot, data, qs: np.ndarray, metrics: tuple[str, ...]) -> np.
         names = [metrics[i] for i in rest]
         instances: dict = {}
         for k, M in enumerate(Ms):
-            values = evaluate(names, GimState(matrix=M), instances)
+            values = evaluate(names, GimState(GivenMatrix(len(M)), full=True, matrix=M), instances)
             out[rest, k] = [values[name] for name in names]
     return out
 

@@ -10,6 +10,7 @@ import numpy.typing as npt
 
 from gimwatch.errors import ConditioningError
 from gimwatch.metrics.conditioning import check_gim, warn_if_ill_conditioned
+from gimwatch.metrics.mass_matrix_sources import PinocchioSource
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.inertia import gim
 from gimwatch.model.robots import Robot, as_configuration
@@ -156,7 +157,7 @@ def analyze_configuration(robot: Robot, q: npt.ArrayLike, *, data=None) -> GimAn
     """Compute κ, δ, both pivot ratios, κ_S and the spectrum of M(q) (dense M, Pinocchio's CRBA)."""
     q = as_configuration(robot, q)
     M = check_robot_gim(robot, gim(robot, q, data=data))
-    state = GimState(robot, data, q, full=True, matrix=M)
+    state = GimState(PinocchioSource(robot, data), q, full=True, matrix=M)
     return analysis_record(
         state,
         ANALYSIS_METRICS,

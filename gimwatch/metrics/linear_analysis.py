@@ -21,6 +21,7 @@ import numpy.typing as npt
 from gimwatch.denoc import DenocModel
 from gimwatch.errors import InputError
 from gimwatch.metrics.dense_analysis import GimAnalysis, analysis_record, check_massless
+from gimwatch.metrics.mass_matrix_sources import DenocLinear
 from gimwatch.metrics.registry import GimState
 from gimwatch.model.chains import ChainSpec
 from gimwatch.model.sampling import uniform_in_limits
@@ -73,7 +74,7 @@ def analyze_linear(
             unknown,
             hint=did_you_mean(unknown[0], LINEAR_METRICS).removeprefix("; "),
         )
-    state = GimState(linear=model.state(q), lanczos=(seed, rtol), to_public=model.to_public)
+    state = GimState(DenocLinear(model), np.asarray(q, dtype=float), lanczos=(seed, rtol))
     check_massless(state.diag, model.dof_names, name=name, source=model.tree.source)
     asked = [key for key in LINEAR_METRICS if key in metrics or key == "diagonal_ratio"]
     return analysis_record(

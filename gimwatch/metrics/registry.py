@@ -1,21 +1,22 @@
 """The metric registry: every conditioning metric of M(q), declared once, looked up by name.
 
 The watch, ``analyze`` (dense and O(n) paths), the survey, the stress suite and the bench
-evaluate metrics through `METRICS` on one `GimState` per configuration. The
-state computes the expensive quantities lazily, at most once, and only when a metric asks:
+evaluate metrics through `METRICS` on one `GimState` per configuration, built on one
+[`MassMatrixSource`][gimwatch.model.mass_matrix_source.MassMatrixSource]. The state computes
+the expensive quantities lazily, at most once, and only when a metric asks, each from what the
+source declares:
 
-* ``M`` — Pinocchio's CRBA ([`gim`][gimwatch.model.inertia.gim]), a dynamics
-  backend's ``gim(q)`` (DeNOC dense, MuJoCo) or a matrix given by the caller; O(n²) to form;
-* ``diag`` — read off M when M is needed anyway, else O(n) without M: DeNOC's compiled
-  composite-mass recursion (one call, buffers kept), the backend's ``gim_diagonal(q)``, or
-  DeNOC's linear-time state;
+* ``M`` — the source's ``gim(q)`` (Pinocchio's CRBA, DeNOC dense, MuJoCo) or a matrix given by
+  the caller; O(n²) to form;
+* ``diag`` — read off M when M is needed anyway, else the source's O(n) ``gim_diagonal(q)``
+  (DeNOC's compiled composite-mass recursion, MuJoCo's sparse M, DeNOC's linear-time state);
 * ``eigenvalues`` (ascending) and ``eigenvectors`` — a symmetric eigen-solve of M, O(n³);
-* ``extremes`` (λmin, λmax) — from the eigen-solve when M is formed, else from the O(n)
-  products of DeNOC's linear-time state (no M) on the κ tracker's engine;
+* ``extremes`` (λmin, λmax) — from the eigen-solve when the source offers no linear state,
+  else from its O(n) products M·x and M⁻¹·x (no M) on the κ tracker's engine;
 * ``equilibrated_extremes`` — (λmin, λmax) of S = D^-1/2 M D^-1/2 (κ_S), dense from M or by
   Lanczos on S·x and S⁻¹·x from the linear state's O(n) products and diagonal;
 * ``ldlt_pivots`` / ``udut_pivots`` — from the Cholesky factor of M, or (UDUᵀ) from the O(n)
-  articulated-body factor of the linear-time state.
+  articulated-body factor of the linear state.
 
 Adding a metric: subclass `Metric` (set ``name`` and ``full``, and write
 ``__call__(state)`` reading only what it needs from the state), decorate it with
@@ -27,96 +28,85 @@ Adding a metric: subclass `Metric` (set ``name`` and ``full``, and write
 from __future__ import annotations
 
 import math
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
-from gimwatch.errors import ConditioningError
 from gimwatch.metrics import conditioning, equilibrated
-from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.mass_matrix_source import LinearState, MassMatrixSource
 from gimwatch.registries import Registry
 
 __all__ = ["METRICS", "GimState", "Metric", "evaluate", "register"]
 
 
 class GimState:
-    """Lazily computed, shared quantities of M(q) at one configuration.
+    """Lazily computed, shared quantities of M(q) at one configuration, from one source.
+
+    Each quantity dispatches to what the source declares (see
+    [`MassMatrixSource`][gimwatch.model.mass_matrix_source.MassMatrixSource]): diag M from
+    ``gim_diagonal`` unless M is formed anyway, δ from ``diagonal_ratio`` when offered, and
+    λmin, λmax, κ_S and the UDUᵀ pivots from ``linear_state`` (O(n), M never formed) when
+    offered, else from M.
 
     Args:
-        robot: The gimwatch Robot (None when M comes from elsewhere).
-        data: A Pinocchio Data for CRBA (None: M from ``dynamics`` or the linear state).
-        q: The configuration (None when M or diag M is given).
+        source: Where M(q) comes from.
+        q: The configuration (None when the source holds M itself).
         full: Whether M is formed anyway (then diag M is read off it).
-        dynamics: An object with ``gim(q)`` and ``gim_diagonal(q)`` giving M and diag M.
-        lean: DeNOC's compiled lean model (``gim_diagonal(q)``, ``diagonal_ratio(q)``).
-        linear: DeNOC's linear-time configuration state (``diagonal()``, ``pivots()``,
-            ``matvec``, ``solve``): the O(n) path, on which M is never formed.
-        lanczos: Seed and relative tolerance of Lanczos on the linear state.
-        matrix: M(q) already formed by the caller (checked here).
-        to_public: Maps a vector of the linear state's (body) order to public order.
+        lanczos: Seed and relative tolerance of Lanczos on the source's linear state.
+        matrix: M(q) of this source already formed by the caller (checked here).
     """
 
     def __init__(
         self,
-        robot=None,
-        data=None,
+        source: MassMatrixSource,
         q: np.ndarray | None = None,
-        full: bool = False,
-        dynamics=None,
-        lean=None,
         *,
-        linear=None,
+        full: bool = False,
         lanczos: tuple[int, float] = (0, 1e-9),
         matrix: np.ndarray | None = None,
-        to_public=None,
     ) -> None:
-        self.robot, self.data, self.q, self.full = robot, data, q, full
-        self.dynamics, self.lean, self.linear, self.lanczos = dynamics, lean, linear, lanczos
-        self._M = self._diag = self._eig = self._vectors = self._extremes = None
-        self._ldlt = self._udut = self._raw = self._equilibrated = None
-        self.to_public = to_public
+        self.source, self.q, self.full, self.lanczos = source, q, full, lanczos
+        self._M: np.ndarray | None = None
+        self._diag: np.ndarray | None = None
+        self._eig: np.ndarray | None = None
+        self._raw: np.ndarray | None = None
+        self._vectors: np.ndarray | None = None
+        self._extremes: tuple[float, float] | None = None
+        self._equilibrated: tuple[float, float] | None = None
+        self._ldlt: np.ndarray | None = None
+        self._udut: np.ndarray | None = None
+        self._linear: LinearState | bool | None = False  # False: not asked yet
         if matrix is not None:
             self._M = conditioning.check_gim(matrix)
+
+    @property
+    def linear(self) -> LinearState | None:
+        """The source's O(n) state of M at q, None when it offers none."""
+        if self._linear is False:
+            self._linear = self.source.linear_state(self.q)
+        return self._linear  # type: ignore[return-value]
 
     @property
     def M(self) -> np.ndarray:
         """The mass matrix at q, checked (finite, symmetric, positive diagonal)."""
         if self._M is None:
-            if self.linear is not None:
-                raise ConditioningError(
-                    "this metric needs M itself, which the O(n) path never forms"
-                )
-            M = (
-                gim(self.robot, self.q, data=self.data)
-                if self.dynamics is None
-                else self.dynamics.gim(self.q)
-            )
-            self._M = conditioning.check_gim(M)
+            self._M = conditioning.check_gim(self.source.gim(self.q))
         return self._M
 
     @property
     def diag(self) -> np.ndarray:
-        """Diag M(q) in Pinocchio's coordinate order, O(n) unless M is formed anyway."""
+        """Diag M(q) in the source's coordinate order, O(n) unless M is formed anyway."""
         if self._diag is None:
-            self._diag = (
-                np.diag(self.M).copy()
-                if self.full or self._M is not None
-                else self.to_public(self.linear.diagonal())
-                if self.linear is not None
-                else self.lean.gim_diagonal(self.q)  # one compiled call, buffers kept
-                if self.lean is not None
-                else gim_diagonal(self.robot, self.q, data=self.data)
-                if self.dynamics is None
-                else self.dynamics.gim_diagonal(self.q)
-            )
+            formed = self.full or self._M is not None
+            self._diag = np.diag(self.M).copy() if formed else self.source.gim_diagonal(self.q)
         return self._diag
 
     @property
     def delta(self) -> float:
-        """δ = max M_ii / min M_ii: one compiled call when DeNOC's lean model serves diag M."""
-        if self.lean is not None and not self.full and self._diag is None:
-            value = self.lean.diagonal_ratio(self.q)
-            if 1.0 <= value < math.inf:  # else the checked path below names the problem
+        """δ = max M_ii / min M_ii: one call when the source offers it and M is not formed."""
+        if not self.full and self._M is None and self._diag is None:
+            value = self.source.diagonal_ratio(self.q)
+            if value is not None and 1.0 <= value < math.inf:  # else the checked path names it
                 return value
         return conditioning.diagonal_ratio(self.diag)
 
@@ -133,7 +123,7 @@ class GimState:
 
         One ``eigh``; a positive spectrum then also serves `eigenvalues`.
         """
-        if self._vectors is None:
+        if self._vectors is None or self._raw is None:
             values, self._vectors = conditioning.eigenpairs(self.M)
             self._raw = values
             if values[0] > 0:  # else `eigenvalues` judges the spectrum itself
@@ -142,32 +132,35 @@ class GimState:
 
     @property
     def extremes(self) -> tuple[float, float]:
-        """(λmin, λmax): from the eigen-solve, or by Lanczos on the O(n) products."""
+        """(λmin, λmax): by Lanczos on the linear state's O(n) products, or the eigen-solve."""
         if self._extremes is None:
-            if self.linear is not None:
-                from gimwatch.metrics.tracker.extremes import extreme_eigenvalues
-
-                seed, rtol = self.lanczos
-                found = extreme_eigenvalues(self.linear, seed=seed, rtol=rtol)
-                self._extremes = (found.lambda_min, found.lambda_max)
-            else:
-                values = self.eigenvalues
-                self._extremes = (float(values[0]), float(values[-1]))
+            linear = self.linear
+            self._extremes = (
+                self._eigen_extremes() if linear is None else self._lanczos_extremes(linear)
+            )
         return self._extremes
+
+    def _eigen_extremes(self) -> tuple[float, float]:
+        values = self.eigenvalues
+        return float(values[0]), float(values[-1])
+
+    def _lanczos_extremes(self, operator: Any) -> tuple[float, float]:
+        from gimwatch.metrics.tracker.extremes import extreme_eigenvalues
+
+        seed, rtol = self.lanczos
+        found = extreme_eigenvalues(operator, seed=seed, rtol=rtol)
+        return found.lambda_min, found.lambda_max
 
     @property
     def equilibrated_extremes(self) -> tuple[float, float]:
-        """(λmin, λmax) of S = D^-1/2 M D^-1/2: eigen-solve of S, or Lanczos at O(n)."""
+        """(λmin, λmax) of S = D^-1/2 M D^-1/2: Lanczos on S·x and S⁻¹·x at O(n), or dense."""
         if self._equilibrated is None:
-            if self.linear is not None:
-                from gimwatch.metrics.tracker.extremes import extreme_eigenvalues
-
-                seed, rtol = self.lanczos
-                scaled = equilibrated.ScaledState(self.linear, self.linear.diagonal())
-                found = extreme_eigenvalues(scaled, seed=seed, rtol=rtol)
-                self._equilibrated = (found.lambda_min, found.lambda_max)
-            else:
-                self._equilibrated = equilibrated.equilibrated_extremes(self.M)
+            linear = self.linear
+            self._equilibrated = (
+                equilibrated.equilibrated_extremes(self.M)
+                if linear is None
+                else self._lanczos_extremes(equilibrated.ScaledState(linear, linear.diagonal()))
+            )
         return self._equilibrated
 
     @property
@@ -179,22 +172,28 @@ class GimState:
 
     @property
     def udut_pivots(self) -> np.ndarray:
-        """Pivots of M = U D Uᵀ (elimination from the tips); O(n) on the linear path."""
+        """Pivots of M = U D Uᵀ (elimination from the tips); O(n) on the linear state."""
         if self._udut is None:
+            linear = self.linear
             self._udut = (
-                self.to_public(self.linear.pivots())
-                if self.linear is not None
-                else conditioning.udut_pivots(self.M)
+                conditioning.udut_pivots(self.M)
+                if linear is None
+                else self.source.to_public(linear.pivots())
             )
         return self._udut
 
 
 class Metric:
-    """One watched quantity. ``full``: needs M (not only its diagonal)."""
+    """One watched quantity.
+
+    ``full``: needs M (not only its diagonal); ``vector``: one value per coordinate;
+    ``needs_robot``: runs the robot's RNEA/ABA at q, so it needs a robot and a configuration.
+    """
 
     name: ClassVar[str]
     full: ClassVar[bool] = True
     vector: ClassVar[bool] = False
+    needs_robot: ClassVar[bool] = False
 
     def __call__(self, state: GimState):
         """The metric's value at the state's configuration."""
@@ -203,6 +202,19 @@ class Metric:
     def severity(self, value: float) -> float:
         """The value on a condition-number scale (large = ill-conditioned), for alarms."""
         return value
+
+    @property
+    def calibration(self) -> float | None:
+        """The constant the metric fixed at its first sample (α of αδ), None when it has none."""
+        return None
+
+    def records(self, samples: int) -> dict[str, np.ndarray]:
+        """Per-sample records the metric keeps besides its value, keyed by suffix.
+
+        A watch hands them out as ``watch_<name>_<suffix>`` beside the values when the metric
+        holds one record per sample (``samples`` of them); none by default.
+        """
+        return {}
 
 
 class Kappa(Metric):
@@ -228,14 +240,16 @@ class KappaEquilibratedTracked(Metric):
 
     name = "kappa_equilibrated_tracked"
     full = False
+    needs_robot = True
 
     def __init__(self) -> None:
         self.tracker = None
 
     def __call__(self, state):
         if self.tracker is None:
+            source = state.source
             self.tracker = equilibrated.equilibrated_tracker(
-                state.robot, state.dynamics, state.data, state.lean
+                source.robot, source, source.pinocchio_data(), source.lean_model()
             )
         return self.tracker.sample(state.q).kappa
 
@@ -251,10 +265,11 @@ class KappaLanczos(Metric):
 
     name = "kappa_lanczos"
     full = False
+    needs_robot = True
     TOL: ClassVar[float] = 1e-3
 
     def __init__(self) -> None:
-        self.tracker = None
+        self.tracker: Any = None
 
     def __call__(self, state):
         if self.tracker is None:
@@ -263,8 +278,11 @@ class KappaLanczos(Metric):
             from gimwatch.metrics.tracker import KappaTracker, TrackerSettings
             from gimwatch.metrics.tracker.providers import gim_products
 
-            provider = state.lean or gim_products(state.robot, state.dynamics, state.data)
-            self.tracker = KappaTracker(provider, state.robot.nv, TrackerSettings(rtol=self.TOL))
+            source = state.source
+            provider = source.lean_model() or gim_products(
+                source.robot, None, source.pinocchio_data()
+            )
+            self.tracker = KappaTracker(provider, source.nv, TrackerSettings(rtol=self.TOL))
         return self.tracker.sample(state.q).kappa
 
 
@@ -283,6 +301,7 @@ class KappaTracked(Metric):
 
     name = "kappa_tracked"
     full = False
+    needs_robot = True
 
     def __init__(self) -> None:
         self.tracker = None
@@ -295,18 +314,25 @@ class KappaTracked(Metric):
             from gimwatch.metrics.tracker import KappaTracker
             from gimwatch.metrics.tracker.providers import gim_products
 
-            robot, dynamics, data = state.robot, state.dynamics, state.data
-            provider = state.lean or gim_products(robot, dynamics, data)
-
-            def dense(q: np.ndarray) -> np.ndarray:
-                return gim(robot, q, data=data) if dynamics is None else dynamics.gim(q)
-
-            self.tracker = KappaTracker(provider, robot.nv, dense=dense)
+            source = state.source
+            provider = source.lean_model() or gim_products(
+                source.robot, None, source.pinocchio_data()
+            )
+            self.tracker = KappaTracker(provider, source.nv, dense=source.gim)
         result = self.tracker.sample(state.q)
         self.products.append(result.products)
         self.fallbacks.append(result.fallback)
         self.error_estimates.append(float(result.error_estimate))
         return result.kappa
+
+    def records(self, samples: int) -> dict[str, np.ndarray]:
+        """Each sample's fallback and relative error bound, when every sample has one."""
+        if len(self.fallbacks) != samples:
+            return {}
+        return {
+            "fallback": np.array(self.fallbacks, dtype=str),
+            "error_estimate": np.array(self.error_estimates),
+        }
 
 
 class DiagonalRatio(Metric):
@@ -327,6 +353,11 @@ class ScaledDiagonalRatioMetric(Metric):
 
     def __init__(self) -> None:
         self.estimator = conditioning.ScaledDiagonalRatio()
+
+    @property
+    def calibration(self) -> float | None:
+        """α = κ(t0)/δ(t0), once the first sample fixed it."""
+        return self.estimator.alpha
 
     def __call__(self, state):
         if not self.estimator.calibrated:  # t0: κ from the state, shared with a watched κ
@@ -397,6 +428,7 @@ class StabilityMargin(Metric):
     """
 
     name = "stability_margin"
+    needs_robot = True
 
     def __init__(self) -> None:
         self.servos = None
@@ -408,7 +440,7 @@ class StabilityMargin(Metric):
         from gimwatch.stability.linear_system import LinearSystem, linearise
         from gimwatch.stability.timestep import max_stable_timestep
 
-        robot = state.robot
+        robot = state.source.robot
         if self.servos is None:
             self.servos, self.data = _file_servos(robot, state.q), robot.new_data()
         servos = self.servos

@@ -26,6 +26,7 @@ import scipy.linalg
 
 from gimwatch.errors import BackendWarning
 from gimwatch.model.inertia import gim, gim_diagonal
+from gimwatch.model.mass_matrix_source import GUARANTEED, Configuration, MassMatrixSource
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 
 __all__ = ["BACKENDS", "Backend", "make_backend", "model_with_gravity"]
@@ -39,13 +40,22 @@ def model_with_gravity(robot: Robot, gravity: np.ndarray | None) -> pin.Model:
     return model
 
 
-class Backend:
-    """Forward dynamics of one robot under one gravity vector."""
+class Backend(MassMatrixSource):
+    """Forward dynamics of one robot under one gravity vector; a source of its M(q) too.
+
+    A backend is the [`MassMatrixSource`][gimwatch.model.mass_matrix_source.MassMatrixSource] a
+    simulation hands its watch: q comes from the integrator (not checked again) and M is
+    positive definite by construction (the robot's masses were checked when it was loaded).
+    """
 
     name: ClassVar[str]
+    robot: Robot
+    check_q = False
+    definiteness = GUARANTEED
 
     def __init__(self, robot: Robot, gravity: np.ndarray | None) -> None:
         self.robot = robot
+        self.nv, self.dof_names = robot.nv, robot.dof_names
         self.gravity = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -60,11 +70,11 @@ class Backend:
             self.data = self.robot.new_data()
         return self.model, self.data
 
-    def gim(self, q: np.ndarray) -> np.ndarray:
+    def gim(self, q: Configuration) -> np.ndarray:
         """M(q), from Pinocchio's CRBA."""
         return gim(self.robot, q, data=self._pinocchio()[1])
 
-    def gim_diagonal(self, q: np.ndarray) -> np.ndarray:
+    def gim_diagonal(self, q: Configuration) -> np.ndarray:
         """Diag M(q) in O(n), from Pinocchio's composite inertias."""
         return gim_diagonal(self.robot, q, data=self._pinocchio()[1])
 
@@ -133,6 +143,10 @@ class DenocBackend(Backend):
 
     def gim(self, q):
         return self.denoc.gim(q)
+
+    def lean_model(self):
+        """The compiled model of the forward dynamics: the watch's diag M and δ too."""
+        return self.lean
 
     def gim_diagonal(self, q):
         return self.lean.gim_diagonal(np.asarray(q, dtype=float))

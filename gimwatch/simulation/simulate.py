@@ -111,7 +111,7 @@ class Simulation:
             spec.metrics,
             alarm_metric=spec.alarm_metric,
             alarm_threshold=spec.alarm_threshold,
-            dynamics=self.backend,
+            source=self.backend,
             warn=False,  # the scene's alarm action reports the alarm
         )
         self.rhs_evaluations = 0

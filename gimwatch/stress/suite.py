@@ -42,6 +42,7 @@ from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 from gimwatch.stress.cases import CASES, StressCase
+from gimwatch.watch.sources import GivenMatrix
 
 __all__ = [
     "ENERGY_DRIFT_LIMIT",
@@ -171,7 +172,7 @@ FINITE_METRICS = (
 
 
 def _estimators_finite(M: np.ndarray) -> bool:
-    values = evaluate(FINITE_METRICS, GimState(full=True, matrix=M))
+    values = evaluate(FINITE_METRICS, GimState(GivenMatrix(len(M)), full=True, matrix=M))
     return bool(np.all(np.isfinite(list(values.values()))))
 
 

@@ -35,6 +35,7 @@ from gimwatch.errors import ConditioningError, GimwatchError, InputError, RobotE
 from gimwatch.metrics.conditioning import warn_if_ill_conditioned
 from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.metrics.estimator_quality import correlations, estimator_quality
+from gimwatch.metrics.mass_matrix_sources import PinocchioSource
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.inertia import gim
 from gimwatch.model.robots import (
@@ -124,7 +125,7 @@ def sample_metrics(robot: Robot, qs: np.ndarray, *, data=None) -> dict[str, np.n
     out |= {key: np.empty(len(qs), dtype=np.int64) for key in DOF_METRICS}
     for row, q in enumerate(qs):
         M = check_robot_gim(robot, gim(robot, q, data=data))
-        state = GimState(robot, data, q, full=True, matrix=M)
+        state = GimState(PinocchioSource(robot, data), q, full=True, matrix=M)
         spectrum, vectors = state.eigenpairs  # one eigh: the spectrum and the extreme modes
         if spectrum[0] <= 0:
             raise ConditioningError(

@@ -1,20 +1,31 @@
 """What a watch hands out of its series: arrays, a DataFrame, a figure.
 
-`SeriesViews` is a part of [`Watch`][gimwatch.watch.watch.Watch]: it reads the watch's
-recorded series, its metrics and its alarm settings; nothing is computed here.
+A `SeriesViews` is held by a [`Watch`][gimwatch.watch.watch.Watch], which delegates to it: it
+reads the recorded series and the watched metrics it was given; nothing is computed here.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 
 from gimwatch.errors import InputError
+from gimwatch.metrics.registry import Metric
+from gimwatch.watch.series import WatchSeries
 
 __all__ = ["SeriesViews"]
 
 
 class SeriesViews:
-    """The outputs of a watch's series (a part of `Watch`, not used alone)."""
+    """The outputs of a watch's series.
+
+    Args:
+        series: The recorded samples.
+        metrics: The watched metrics by name (their records and severities are read here).
+    """
+
+    def __init__(self, series: WatchSeries, metrics: dict[str, Metric]) -> None:
+        self._series, self.metrics = series, metrics
 
     @property
     def times(self) -> np.ndarray:
@@ -40,10 +51,10 @@ class SeriesViews:
         out = {"watch_t": self.times.copy()}
         for name, values in self.series.items():
             out[f"watch_{name}"] = values.copy()
-        tracked = self.metrics.get("kappa_tracked")
-        if tracked is not None and len(tracked.fallbacks) == len(out["watch_t"]):
-            out["watch_kappa_tracked_fallback"] = np.array(tracked.fallbacks, dtype=str)
-            out["watch_kappa_tracked_error_estimate"] = np.array(tracked.error_estimates)
+        samples = len(out["watch_t"])
+        for name, metric in self.metrics.items():  # what a metric records besides its value
+            for suffix, record in metric.records(samples).items():
+                out[f"watch_{name}_{suffix}"] = record
         return out
 
     def to_dataframe(self):
@@ -56,7 +67,13 @@ class SeriesViews:
 
         return watch_frame(self.arrays())
 
-    def plot(self, metrics: tuple[str, ...] | None = None, *, ax=None):
+    def plot(
+        self,
+        metrics: tuple[str, ...] | None = None,
+        *,
+        ax=None,
+        alarm: tuple[str | None, float] = (None, 0.0),
+    ):
         """The watched scalar metrics over time on a log axis, with the alarm threshold.
 
         For the own-loop case, the figure a results folder has for ``simulate``
@@ -66,6 +83,7 @@ class SeriesViews:
         Args:
             metrics: Which watched metrics (default: every scalar one).
             ax: Matplotlib Axes to draw on (a new figure's when None).
+            alarm: The watch's alarm metric (None for none) and threshold.
 
         Returns:
             The Axes.
@@ -77,12 +95,13 @@ class SeriesViews:
         unknown = [n for n in chosen if n not in scalar]
         if unknown or not chosen:
             raise InputError("the metrics to plot", f"watched scalar metrics {scalar}", unknown)
+        alarm_metric, alarm_threshold = alarm
         threshold = None
-        if self.alarm_metric in chosen:  # drawn where the metric's value is its severity
-            severity = self.metrics[self.alarm_metric].severity
-            if severity(self.alarm_threshold) == self.alarm_threshold:
-                threshold = self.alarm_threshold
-        series = {name: self.array(name) for name in chosen}
+        if alarm_metric in chosen:  # drawn where the metric's value is its severity
+            severity = self.metrics[alarm_metric].severity
+            if severity(alarm_threshold) == alarm_threshold:
+                threshold = alarm_threshold
+        series: dict[str, npt.ArrayLike] = {name: self.array(name) for name in chosen}
         return plot_watch(
-            self.array("t"), series, alarm_metric=self.alarm_metric, threshold=threshold, ax=ax
+            self.array("t"), series, alarm_metric=alarm_metric, threshold=threshold, ax=ax
         )

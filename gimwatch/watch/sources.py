@@ -1,8 +1,9 @@
 """Where a watch gets M(q) in a loop gimwatch does not own: MuJoCo, a Pinocchio model, a matrix.
 
-Each source offers what [`Watch`][gimwatch.watch.watch.Watch] asks of its ``dynamics``:
+Each source is a [`MassMatrixSource`][gimwatch.model.mass_matrix_source.MassMatrixSource]:
 ``nv``, ``dof_names``, ``gim(q)`` (the full M) and ``gim_diagonal(q)`` (diag M only, O(n),
-no M formed), so that a metric nobody watches is never paid for.
+no M formed), plus the faster paths it declares (δ in one call, M into the watch's buffer), so
+that a metric nobody watches is never paid for.
 
 * [`MujocoSource`][gimwatch.watch.sources.MujocoSource] — M from a MuJoCo
   ``MjModel``/``MjData`` pair. With ``q=None`` it reads the M that MuJoCo already holds in the
@@ -30,6 +31,8 @@ coupling blocks of M differ.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
@@ -38,6 +41,11 @@ from gimwatch.errors import InputError
 from gimwatch.joint_kinds import JointKind, joint_kind, joint_type_name
 from gimwatch.metrics.conditioning import check_gim
 from gimwatch.model.denoc_input import urdf_of_model
+from gimwatch.model.mass_matrix_source import (
+    CHECK_EVERY_SAMPLE,
+    GUARANTEED,
+    MassMatrixSource,
+)
 from gimwatch.model.mjcf_compiled import import_mujoco
 from gimwatch.model.mujoco_model import make_mass_matrix
 from gimwatch.model.robots import Robot
@@ -100,13 +108,18 @@ def robot_from_model(model: pin.Model, *, name: str | None = None) -> Robot:
     )
 
 
-class GivenMatrix:
-    """The M (or only diag M) a caller holds, behind the ``gim``/``gim_diagonal`` protocol.
+class GivenMatrix(MassMatrixSource):
+    """The M (or only diag M) a caller holds, as a `MassMatrixSource` (checked when held).
 
     Args:
         nv: Size of M.
         dof_names: Names of the coordinates (``dof0``, ``dof1``, … when omitted).
     """
+
+    #: What it holds was checked when handed in (finite, symmetric, positive diagonal).
+    definiteness = GUARANTEED
+    #: ``gim(None)`` is the held M.
+    reads_state = True
 
     def __init__(self, nv: int, dof_names: tuple[str, ...] | None = None) -> None:
         if isinstance(nv, bool) or not isinstance(nv, int | np.integer) or nv < 1:
@@ -118,9 +131,7 @@ class GivenMatrix:
         self.dof_names = tuple(str(n) for n in names)
         self._M: np.ndarray | None = None
         self._diag: np.ndarray | None = None
-        from gimwatch.model.kernels import positive_ratio  # numba: only for a matrix watch
-
-        self._positive_ratio = positive_ratio
+        self._positive_ratio: Any = None  # numba's kernel, imported by the first δ asked for
 
     def hold_matrix(self, matrix: npt.ArrayLike) -> None:
         """Hold M for the next sample; checks it is real, of shape (nv, nv), finite, symmetric.
@@ -147,6 +158,10 @@ class GivenMatrix:
 
     def diagonal_ratio(self, q=None) -> float:
         """δ of the held diagonal; NaN (the watch's checked path) unless all are finite and > 0."""
+        if self._positive_ratio is None:
+            from gimwatch.watch.kernels import positive_ratio  # numba: only when δ is asked
+
+            self._positive_ratio = positive_ratio
         return self._positive_ratio(self.gim_diagonal())
 
     def gim(self, q=None) -> np.ndarray:
@@ -161,10 +176,12 @@ class GivenMatrix:
 
     def gim_diagonal(self, q=None) -> np.ndarray:
         """The held diag M (or the diagonal of the held M)."""
-        return np.diag(self._M).copy() if self._diag is None else self._diag
+        if self._diag is not None:
+            return self._diag
+        return np.diag(self.gim()).copy()
 
 
-class MujocoSource:
+class MujocoSource(MassMatrixSource):
     """M from a MuJoCo ``MjModel``/``MjData`` pair (see the module docstring).
 
     Args:
@@ -201,7 +218,7 @@ class MujocoSource:
         self.nv = int(model.nv)
         self._diag_index = np.asarray(model.M_rowadr + model.M_rownnz - 1, dtype=np.intp)
         extra = bool(np.any(model.tendon_armature)) or bool(
-            np.any(getattr(model, "actuator_armature", ()))
+            np.any(model.actuator_armature)  # MuJoCo >= 4 (pyproject)
         )
         if not armature and extra:
             raise InputError(
@@ -214,6 +231,7 @@ class MujocoSource:
         #: Whether M is positive definite by construction; a negative armature may break it,
         #: and then the watch checks M at every sample.
         self.trusted = not np.any(np.asarray(model.dof_armature) < 0)
+        self.definiteness = GUARANTEED if self.trusted else CHECK_EVERY_SAMPLE
         joint_type = mujoco.mjtJoint
         quaternion_joints = (model.jnt_type == joint_type.mjJNT_FREE) | (
             model.jnt_type == joint_type.mjJNT_BALL
@@ -222,7 +240,7 @@ class MujocoSource:
             model.jnt_type[quaternion_joints] == joint_type.mjJNT_FREE, 3, 0
         )
         self._quaternions = np.asarray(starts, dtype=np.intp)[:, None] + np.arange(4)
-        from gimwatch.model.kernels import positive_ratio  # numba: only for a MuJoCo watch
+        from gimwatch.watch.kernels import positive_ratio  # numba: only for a MuJoCo watch
 
         self._positive_ratio = positive_ratio
         self._own = None
@@ -334,6 +352,10 @@ class MujocoSource:
             M[lin, :] = R.T @ M[lin, :]
             M[:, lin] = M[:, lin] @ R
         return M
+
+    def gim_into(self, q, out: np.ndarray) -> np.ndarray:
+        """M written into ``out`` (no allocation when no robot's coordinates are asked for)."""
+        return self.gim(q, out=out)
 
     def gim_diagonal(self, q=None) -> np.ndarray:
         """The diagonal of M from MuJoCo's sparse M, no M formed (the rotation keeps it)."""

@@ -19,19 +19,20 @@ import numpy as np
 import pinocchio as pin
 
 from gimwatch.errors import GimwatchError
+from gimwatch.model.mass_matrix_source import MassMatrixSource
 from gimwatch.model.robots import Robot
 
 __all__ = ["PinocchioProducts", "gim_products", "lean_model"]
 
 
-def lean_model(robot: Robot, dynamics=None):
+def lean_model(robot: Robot, dynamics: MassMatrixSource | None = None):
     """DeNOC's compiled model of ``robot`` in Pinocchio's coordinate order, or None.
 
     Args:
         robot: The robot.
-        dynamics: A simulation backend; its ``lean`` model is reused when it has one.
+        dynamics: The source of M (a simulation backend); its declared lean model is reused.
     """
-    lean = getattr(dynamics, "lean", None)
+    lean = None if dynamics is None else dynamics.lean_model()
     if lean is not None:
         return lean
     from gimwatch.metrics.denoc_robot import denoc_model

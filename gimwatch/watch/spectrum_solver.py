@@ -5,7 +5,7 @@ eigenvectors: a reduction to tridiagonal form (O(n³), nearly all the time) and 
 tridiagonal eigenvalues (``sterf``, O(n²)). How it is called decides its cost on small
 matrices (2-core benchmark host, one BLAS thread; `gimwatch bench watch_overhead`):
 
-* n ≤ `COMPILED_MAX_NV`: the numba kernel `gimwatch.model.kernels.scaled_spectrum`, no
+* n ≤ `COMPILED_MAX_NV`: the numba kernel `gimwatch.watch.kernels.scaled_spectrum`, no
   Python wrapper at all (LAPACK reduces these sizes unblocked whatever the workspace);
 * n ≤ `UNBLOCKED_MAX_NV`: SciPy's ``dsyevd`` given its minimal workspace, which keeps the
   tridiagonal reduction unblocked. The blocked one, which NumPy's ``eigvalsh`` and numba ask
@@ -14,14 +14,14 @@ matrices (2-core benchmark host, one BLAS thread; `gimwatch bench watch_overhead
 * larger n: ``dsyevd`` with its optimal workspace (the blocked reduction).
 
 Every path scales M by s = 2^k first when its entries leave [2^-400, 2^400] (see
-`gimwatch.model.kernels.spectrum_scale`), so a finite M keeps a finite spectrum.
+`gimwatch.watch.kernels.spectrum_scale`), so a finite M keeps a finite spectrum.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from gimwatch.model import kernels
+from gimwatch.watch import kernels
 
 __all__ = ["COMPILED_MAX_NV", "UNBLOCKED_MAX_NV", "SpectrumSolver"]
 
