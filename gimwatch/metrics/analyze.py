@@ -10,7 +10,6 @@ unless the caller asks for one.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -45,6 +44,7 @@ __all__ = [
     "choose_path",
     "resolve_robot",
     "robot_for_path",
+    "spec_of",
     "velocity_units",
 ]
 
@@ -124,7 +124,7 @@ def choose_path(
         options["body"] = body
     if armature is not None:
         options["armature"] = armature
-    return resolve_robot(robot, backend, **options)[0]
+    return _chosen(_subject(robot, backend, options), backend)
 
 
 def resolve_robot(
@@ -139,47 +139,97 @@ def resolve_robot(
     Raises:
         InputError: An unknown ``backend``, or spec options given with a loaded `Robot`.
     """
+    subject = _subject(robot, backend, options)
+    path = _chosen(subject, backend)
+    if isinstance(subject, Robot):
+        return path, subject
+    if subject.chain is None:  # a path asked for: the robot is loaded now, once
+        return path, robot_for_path(subject)
+    if path == "crba":  # refused before building anything above DATA_NV_LIMIT
+        loaded = load_robot(subject, max_nv=DATA_NV_LIMIT)
+        _remember(loaded)
+        return path, loaded
+    return path, subject if not subject.floating else robot_for_path(subject)
+
+
+def _subject(robot: RobotLike, backend: str, options: SpecOptions) -> Robot | RobotSpec:
+    """A loaded robot as given, else the spec parsed, a file's or a named robot loaded."""
     if backend not in PATHS:
         raise InputError("backend", f"one of {', '.join(PATHS)}", backend)
     if isinstance(robot, Robot):
         for name, value in options.items():
             if value is not None:
                 raise InputError(name, "given with the robot's text or RobotSpec", value)
-        return _path(backend, robot.nv), robot
+        _remember(robot)
+        return robot
     spec = robot_spec(robot, **options)
-    if spec.chain is None:
-        loaded = robot_for_path(spec)
-        return _path(backend, loaded.nv), loaded
-    path = _path(backend, spec.chain.n + 6 * spec.floating)
-    if path == "crba":  # refused before building anything above DATA_NV_LIMIT
-        return path, load_robot(spec, max_nv=DATA_NV_LIMIT)
-    return path, spec if not spec.floating else robot_for_path(spec)
+    if spec.chain is not None or backend != "auto":
+        return spec  # a chain's nv is known; a path asked for needs no nv
+    return robot_for_path(spec)  # its Pinocchio Model, never a Data
 
 
-def _path(backend: str, nv: int) -> str:
+def _chosen(subject: Robot | RobotSpec, backend: str) -> str:
     if backend != "auto":
         return backend
+    if isinstance(subject, Robot):
+        nv = subject.nv
+    else:
+        assert subject.chain is not None  # _subject loads every other spec under auto
+        nv = subject.chain.n + 6 * subject.floating
     return "denoc" if nv > DATA_NV_LIMIT else "crba"
 
 
-def robot_for_path(spec: RobotSpec | str | Path) -> Robot:
+def robot_for_path(spec: RobotLike) -> Robot:
     """`load_robot` without a Data limit (the Model is O(nv)), kept for the next call.
 
-    `choose_path` and the path it chooses read the robot once: the last few loads are
-    kept, keyed by the spec and by the file's size and modification time.
+    `choose_path` and the path it chooses read the robot once: the last few loads (and
+    robots given loaded) are kept, keyed by the spec and the file's size and modification
+    time.
     """
+    if isinstance(spec, Robot):
+        _remember(spec)
+        return spec
     parsed = robot_spec(spec)
+    key = (parsed, _version(parsed))
+    robot = _LOADED.get(key)
+    if robot is None:
+        robot = load_robot(parsed)
+        _remember(robot, key)
+    return robot
+
+
+def spec_of(robot: RobotLike) -> RobotSpec:
+    """The `RobotSpec` of ``robot``; a loaded `Robot` is kept for `robot_for_path`."""
+    if isinstance(robot, Robot):
+        if robot.robot_spec is None:
+            raise InputError("robot", "a Robot made by load_robot (it keeps its spec)", robot)
+        _remember(robot)
+        return robot.robot_spec
+    return robot_spec(robot)
+
+
+#: The last few robots `robot_for_path` loaded or was given, by (spec, file version).
+_LOADED: dict[tuple[RobotSpec, tuple[int, int] | None], Robot] = {}
+_LOADED_KEPT = 4
+
+
+def _version(spec: RobotSpec) -> tuple[int, int] | None:
     try:
-        stat = Path(parsed.text).stat()
-        version = (stat.st_size, stat.st_mtime_ns)
+        stat = Path(spec.text).stat()
     except (OSError, ValueError):
-        version = None
-    return _load(parsed, version)
+        return None
+    return (stat.st_size, stat.st_mtime_ns)
 
 
-@functools.lru_cache(maxsize=4)
-def _load(spec: RobotSpec, version: tuple[int, int] | None) -> Robot:
-    return load_robot(spec)
+def _remember(robot: Robot, key=None) -> None:
+    if key is None:
+        if robot.robot_spec is None:
+            return
+        key = (robot.robot_spec, _version(robot.robot_spec))
+    _LOADED.pop(key, None)
+    _LOADED[key] = robot
+    while len(_LOADED) > _LOADED_KEPT:
+        del _LOADED[next(iter(_LOADED))]
 
 
 @dataclass(frozen=True)
