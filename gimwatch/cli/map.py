@@ -11,8 +11,8 @@ from tqdm import tqdm
 from gimwatch.cli._format import check_workers, positive_int
 from gimwatch.errors import InputError
 from gimwatch.explain.map_files import write_map, write_trajectory_metrics
-from gimwatch.explain.maps import MAX_GRID, conditioning_map
-from gimwatch.explain.trajectory import trajectory_metrics
+from gimwatch.explain.maps import MAX_GRID, ConditioningMap, conditioning_map
+from gimwatch.explain.trajectory import TrajectoryMetrics, trajectory_metrics
 from gimwatch.metrics.analyze import RobotLike, robot_for_path
 from gimwatch.model.configuration import user_configuration
 from gimwatch.model.robot_spec import RobotSpec
@@ -77,6 +77,7 @@ def run(args: argparse.Namespace) -> int:
             "progress": progress,
         }
         robot: RobotLike = RobotSpec.parse(args.robot)  # parsed once, loaded at most once
+        result: ConditioningMap | TrajectoryMetrics
         if args.trajectory is not None:
             result = trajectory_metrics(robot, args.trajectory, **common)
         else:
@@ -91,9 +92,9 @@ def run(args: argparse.Namespace) -> int:
     if result.interrupted:
         print("gimwatch: interrupted: writing the part computed (NaN elsewhere)", file=sys.stderr)
     written = (
-        write_trajectory_metrics(result, args.output)
-        if args.trajectory is not None
-        else write_map(result, args.output)
+        write_map(result, args.output)
+        if isinstance(result, ConditioningMap)
+        else write_trajectory_metrics(result, args.output)
     )
     for metric, values in result.values.items():
         low, high = np.nanmin(values), np.nanmax(values)

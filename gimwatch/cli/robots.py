@@ -34,7 +34,8 @@ def robot_rows() -> list[dict]:
 
     rows = []
     for name in example_robot_names():
-        row = {"name": name, "nv": None, "base": "", "source": "", "problem": ""}
+        row: dict[str, object] = {"name": name, "nv": None, "base": "", "source": ""}
+        row["problem"] = ""
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # suspicious inertias are analyze's business
             for floating in (None, True):  # the default base; a free-flyer if it has no joint

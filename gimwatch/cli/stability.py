@@ -121,12 +121,12 @@ def _h(value: float) -> str:
 
 def _print(results, args: argparse.Namespace) -> None:
     if args.json:
-        rows = []
+        records_json: list[dict] = []
         for spec, records, reason in results:
             if reason:
-                rows.append({"robot": spec, "status": "refused", "reason": reason})
-            rows.extend(r.to_dict() for r in records)
-        print(json_text({"rows": rows}))
+                records_json.append({"robot": spec, "status": "refused", "reason": reason})
+            records_json.extend(r.to_dict() for r in records)
+        print(json_text({"rows": records_json}))
         return
     headers = [
         "robot",
@@ -139,7 +139,8 @@ def _print(results, args: argparse.Namespace) -> None:
         "critical_dof",
         "limited_by",
     ]
-    rows, notes = [], {}
+    rows: list[list[object]] = []
+    notes: dict[str, tuple[str, ...]] = {}
     for spec, records, reason in results:
         if reason:
             print(f"{spec}: refused: {reason}", file=sys.stderr)
