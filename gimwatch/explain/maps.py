@@ -33,7 +33,7 @@ from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.metrics.linear_analysis import LINEAR_METRICS
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
 from gimwatch.model.q_checks import as_configurations
-from gimwatch.model.robot_spec import RobotSpec
+from gimwatch.model.robot_spec import RobotSpec, robot_spec
 from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
 from gimwatch.model.sampling import is_real_limit
 from gimwatch.suggest import did_you_mean
@@ -111,8 +111,9 @@ def _lean(spec: RobotSpec):
     return _linear_model(spec)[0].lean()
 
 
-def robot_coordinates(spec: RobotSpec, path: str) -> tuple[str, list[str]]:
+def robot_coordinates(spec: RobotSpec | str, path: str) -> tuple[str, list[str]]:
     """(robot name, names of the q coordinates in order) on ``path``."""
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
     if path == "denoc" and spec.chain is not None:
         model, name = _linear_model(spec)
         return name, list(model.joint_names)
@@ -122,11 +123,14 @@ def robot_coordinates(spec: RobotSpec, path: str) -> tuple[str, list[str]]:
     return robot.name, joint_coordinate_units(robot.model)[0]
 
 
-def metrics_at(spec: RobotSpec, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -> np.ndarray:
+def metrics_at(
+    spec: RobotSpec | str, path: str, qs: np.ndarray, metrics: tuple[str, ...]
+) -> np.ndarray:
     """The metrics at each configuration of ``qs`` (K, nq): an array (len(metrics), K).
 
     Module-level and keyed by ``spec`` so that it can run in worker processes.
     """
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
     out = np.full((len(metrics), len(qs)), np.nan)
     if path == "denoc":
         from gimwatch.metrics.linear_analysis import analyze_linear
@@ -207,13 +211,14 @@ class ConditioningMap:
 
 
 def checked_configurations(
-    spec: RobotSpec, path: str, qs: np.ndarray, *, name: str = "q"
+    spec: RobotSpec | str, path: str, qs: np.ndarray, *, name: str = "q"
 ) -> np.ndarray:
     """``qs`` (K, nq) checked as every q is checked (`gimwatch.model.q_checks`).
 
     Length and finiteness; on Pinocchio's path each (cos θ, sin θ) and quaternion of norm 1
     too (DeNOC's q are angles, without unit blocks).
     """
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
     if path != "denoc":
         return as_configurations(_robot(spec), qs, name=name)
     size = len(_linear_model(spec)[0].joint_names)
@@ -223,13 +228,14 @@ def checked_configurations(
 
 
 def map_axes(
-    spec: RobotSpec, path: str, joints: Sequence[str]
+    spec: RobotSpec | str, path: str, joints: Sequence[str]
 ) -> tuple[str, list[int], list[str], list]:
     """(robot name, q index, unit, (lower, upper)) of each named joint, and the neutral q.
 
     Raises:
         InputError: Unknown joints, a joint named twice, or a joint not of one coordinate.
     """
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
     if len(joints) != 2 or joints[0] == joints[1]:
         raise InputError("joints", "two different joint names", list(joints))
     chain = spec.chain
