@@ -229,3 +229,17 @@ def test_watch_sample_skips_robots_py(first: bool) -> None:
         watch.sample(1.0, q + 0.1)
     assert sum(passes.entries.values()) <= 1, dict(passes.entries)
     assert not passes.spec_entries and passes.parses == 0
+
+
+@pytest.mark.parametrize("robot", ["ur5", "chain:4"])
+def test_scene_robot_parses_and_loads_once(robot: str) -> None:
+    """A scene's robot (its text, or a ``chain:N`` the scene reads as a chain) is loaded once."""
+    from gimwatch.simulation.scene import parse_scene
+    from gimwatch.simulation.scene_robot import load_scene_robot
+
+    scene = parse_scene({"robot": robot, "duration": 0.2, "sample": 0.05}, source="s.toml")
+    with Passes() as passes:
+        loaded = load_scene_robot(scene)
+    assert passes.parses <= 1 and passes.loads == 1, (passes.parses, dict(passes.spec_entries))
+    assert sum(passes.spec_entries.values()) == 1
+    assert loaded.robot_spec is not None and loaded.robot_spec.text == robot
