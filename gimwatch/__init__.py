@@ -60,6 +60,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.metrics.tracker import KappaTracker, TrackedKappa, track_kappa
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
     from gimwatch.model.inertia import gim, gim_diagonal
+    from gimwatch.model.robot_spec import RobotSpec
     from gimwatch.model.robots import (
         Robot,
         default_floating,
@@ -99,6 +100,7 @@ _EXPORTS: dict[str, str] = {
     "OutputError": "gimwatch.errors",
     "PlanarChainReference": "gimwatch.stress.reference_planar",
     "Robot": "gimwatch.model.robots",
+    "RobotSpec": "gimwatch.model.robot_spec",
     "RobotError": "gimwatch.errors",
     "RobotFailure": "gimwatch.survey.records",
     "RobotSurvey": "gimwatch.survey.records",
@@ -188,6 +190,7 @@ __all__ = [
     "Robot",
     "RobotError",
     "RobotFailure",
+    "RobotSpec",
     "RobotSurvey",
     "ScaledDiagonalRatio",
     "Scene",
