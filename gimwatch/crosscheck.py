@@ -1,8 +1,8 @@
 """Cross-check of the DeNOC implementation against Pinocchio, robot by robot.
 
 At K seeded random states (q within the joint limits from
-[`random_configurations`][gimwatch.model.robots.random_configurations]; v, a, τ standard normal from
-a NumPy generator with the same seed) it compares
+[`random_configurations`][gimwatch.model.sampling.random_configurations]; v, a, τ standard
+normal from a NumPy generator with the same seed) it compares
 
 * the GIM with ``pinocchio.crba`` (and its O(n) diagonal),
 * τ with ``pinocchio.rnea``,
@@ -36,13 +36,13 @@ from gimwatch.errors import InputError, URDFError
 from gimwatch.metrics.conditioning import extreme_ratio, warn_if_ill_conditioned
 from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.model.denoc_input import instantaneous_urdf
-from gimwatch.model.robots import (
-    EXAMPLE_ROBOT_NOTES,
-    Robot,
+from gimwatch.model.example_robots import EXAMPLE_ROBOT_NOTES
+from gimwatch.model.robots import Robot
+from gimwatch.model.sampling import (
     placeholder_limit_joints,
+    placeholder_note,
     random_configurations,
 )
-from gimwatch.model.sampling import placeholder_note
 
 __all__ = ["CrossCheckResult", "crosscheck_robot", "denoc_model"]
 

@@ -14,7 +14,8 @@ from gimwatch.denoc import DenocModel, chain_body_tree, extreme_eigenvalues, rea
 from gimwatch.errors import BackendWarning
 from gimwatch.metrics.linear_analysis import analyze_linear, chain_configurations
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
-from gimwatch.model.robots import Robot, load_robot, random_configurations
+from gimwatch.model.robots import Robot, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import run_scene
 from gimwatch.stress.reference_planar import PlanarChainReference

@@ -36,7 +36,8 @@ from gimwatch.metrics.conditioning import (
 )
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 __all__ = ["COLUMNS", "FULL_SIZES", "QUICK_SIZES", "run"]
 

@@ -40,7 +40,8 @@ from gimwatch.metrics.conditioning import (
 )
 from gimwatch.metrics.matrix_free import kappa_matrix_free
 from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.robots import Robot, load_robot, random_configurations
+from gimwatch.model.robots import Robot, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import run_scene
 

@@ -30,7 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def robot_rows() -> list[dict]:
     """One row per example-robot-data robot: name, nv, base, source, problem ("" if none)."""
     from gimwatch.errors import GimwatchError
-    from gimwatch.model.robots import example_robot_names, load_robot
+    from gimwatch.model.example_robots import example_robot_names
+    from gimwatch.model.robots import load_robot
 
     rows = []
     for name in example_robot_names():

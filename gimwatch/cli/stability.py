@@ -12,7 +12,8 @@ from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.cli._records import json_text
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.model.configuration import user_configuration
-from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, random_configurations
+from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.stability.analysis import stability
 from gimwatch.stability.step_maps import INTEGRATORS
 

@@ -35,7 +35,7 @@ def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np
     """Random configurations of a generated chain, shape ``(count, n)``, within its limits.
 
     Draws exactly what
-    [`random_configurations`][gimwatch.model.robots.random_configurations]
+    [`random_configurations`][gimwatch.model.sampling.random_configurations]
     draws for the same chain and seed (one uniform number per joint and configuration, joint by
     joint), without building a Pinocchio model.
     """

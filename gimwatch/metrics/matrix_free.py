@@ -24,7 +24,8 @@ from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
 from gimwatch.denoc.linear import MatrixFreeKappa
 from gimwatch.errors import ConditioningError, InputError
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import Robot
 
 __all__ = [
     "gim_inverse_operator",

@@ -33,48 +33,18 @@ import pinocchio as pin
 from gimwatch.errors import ExampleRobotWarning, InputError, RobotError, URDFError
 from gimwatch.model.captured_output import captured_c_output
 from gimwatch.model.chains import ChainSpec, generate_chain_urdf
-from gimwatch.model.example_robots import (
-    EXAMPLE_ROBOT_NOTES,
-    example_robot_names,
-    example_robot_urdf,
-)
+from gimwatch.model.example_robots import EXAMPLE_ROBOT_NOTES, example_robot_urdf
 from gimwatch.model.mjcf_model import is_mjcf
-from gimwatch.model.q_checks import UNIT_NORM_TOLERANCE, as_configuration, unit_blocks
 from gimwatch.model.robot_files import read_robot_file
-from gimwatch.model.robot_spec import (
-    RobotSpec,
-    default_floating,
-    display_name,
-    parse_chain_spec,
-    robot_spec,
-)
-from gimwatch.model.sampling import (
-    PLACEHOLDER_LIMIT,
-    check_random_budget,
-    placeholder_limit_joints,
-    random_configurations,
-)
+from gimwatch.model.robot_spec import RobotSpec, robot_spec
 
 __all__ = [
-    "EXAMPLE_ROBOT_NOTES",
-    "PLACEHOLDER_LIMIT",
-    "UNIT_NORM_TOLERANCE",
+    "DATA_NV_LIMIT",
+    "MAX_TREE_DEPTH",
     "Robot",
-    "RobotSpec",
-    "as_configuration",
-    "captured_c_output",
     "chain_robot",
-    "check_random_budget",
-    "default_floating",
-    "display_name",
-    "example_robot_names",
-    "is_mjcf",
     "load_robot",
     "neutral_configuration",
-    "parse_chain_spec",
-    "placeholder_limit_joints",
-    "random_configurations",
-    "unit_blocks",
 ]
 
 #: Above this many velocity coordinates, a Pinocchio Data would need several GB.

@@ -19,8 +19,9 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.model.configuration import user_configuration
+from gimwatch.model.q_checks import as_configuration
 from gimwatch.model.robot_spec import RobotSpec
-from gimwatch.model.robots import Robot, as_configuration, load_robot
+from gimwatch.model.robots import Robot, load_robot
 from gimwatch.stability.linear_system import LinearSystem, linearise
 from gimwatch.stability.servos import Servos, gain_servos, mjcf_servos
 from gimwatch.stability.step_maps import check_integrator

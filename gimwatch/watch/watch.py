@@ -25,13 +25,8 @@ from gimwatch.errors import InputError
 from gimwatch.metrics.conditioning import ldlt_pivots
 from gimwatch.metrics.estimator_quality import EstimatorQuality, estimator_quality
 from gimwatch.metrics.registry import METRICS, GimState
-from gimwatch.model.robots import (
-    DATA_NV_LIMIT,
-    UNIT_NORM_TOLERANCE,
-    Robot,
-    as_configuration,
-    unit_blocks,
-)
+from gimwatch.model.q_checks import UNIT_NORM_TOLERANCE, as_configuration, unit_blocks
+from gimwatch.model.robots import DATA_NV_LIMIT, Robot
 from gimwatch.watch.alarm import (
     DEFAULT_ALARM_THRESHOLD,
     Alarm,
