@@ -53,15 +53,11 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from gimwatch.metrics.estimator_quality import estimator_quality
     from gimwatch.metrics.tracker import KappaTracker, TrackedKappa, TrackerSettings, track_kappa
     from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf, write_chain_urdf
+    from gimwatch.model.example_robots import example_robot_names
     from gimwatch.model.inertia import gim, gim_diagonal
-    from gimwatch.model.robots import (
-        Robot,
-        default_floating,
-        example_robot_names,
-        load_robot,
-        neutral_configuration,
-        random_configurations,
-    )
+    from gimwatch.model.robot_spec import RobotSpec, default_floating
+    from gimwatch.model.robots import Robot, load_robot, neutral_configuration
+    from gimwatch.model.sampling import random_configurations
     from gimwatch.simulation.bundled_scenes import bundled_scenes
     from gimwatch.simulation.results_folder import summarize, write_simulation
     from gimwatch.simulation.scene import Scene, load_scene, parse_scene
@@ -93,6 +89,7 @@ _EXPORTS: dict[str, str] = {
     "OutputError": "gimwatch.errors",
     "PlanarChainReference": "gimwatch.stress.reference_planar",
     "Robot": "gimwatch.model.robots",
+    "RobotSpec": "gimwatch.model.robot_spec",
     "RobotError": "gimwatch.errors",
     "RobotFailure": "gimwatch.survey.records",
     "RobotSurvey": "gimwatch.survey.records",
@@ -119,20 +116,20 @@ _EXPORTS: dict[str, str] = {
     "diagonal_ratio": "gimwatch.metrics.conditioning",
     "eigenvalues": "gimwatch.metrics.conditioning",
     "estimator_quality": "gimwatch.metrics.estimator_quality",
-    "example_robot_names": "gimwatch.model.robots",
+    "example_robot_names": "gimwatch.model.example_robots",
     "generate_chain_urdf": "gimwatch.model.chains",
     "gim": "gimwatch.model.inertia",
     "gim_diagonal": "gimwatch.model.inertia",
     "ldlt_pivots": "gimwatch.metrics.conditioning",
     "load_robot": "gimwatch.model.robots",
-    "default_floating": "gimwatch.model.robots",
+    "default_floating": "gimwatch.model.robot_spec",
     "load_scene": "gimwatch.simulation.scene",
     "neutral_configuration": "gimwatch.model.robots",
     "parse_scene": "gimwatch.simulation.scene",
     "pivot_ratio_backward": "gimwatch.metrics.conditioning",
     "pivot_ratio_forward": "gimwatch.metrics.conditioning",
     "planar_reference": "gimwatch.stress.reference_planar",
-    "random_configurations": "gimwatch.model.robots",
+    "random_configurations": "gimwatch.model.sampling",
     "run_scene": "gimwatch.simulation.simulate",
     "run_stress": "gimwatch.stress.suite",
     "run_survey": "gimwatch.survey.run",
@@ -178,6 +175,7 @@ __all__ = [
     "Robot",
     "RobotError",
     "RobotFailure",
+    "RobotSpec",
     "RobotSurvey",
     "ScaledDiagonalRatio",
     "Scene",

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from threadpoolctl import threadpool_limits
 
-from gimwatch.model.robots import example_robot_names
+from gimwatch.model.example_robots import example_robot_names
 
 # Small dense eigen-solves are 20-40x slower with multi-threaded OpenBLAS on 2 cores.
 _BLAS_LIMIT = threadpool_limits(limits=1, user_api="blas")

@@ -18,7 +18,8 @@ import pinocchio as pin
 import pytest
 
 from gimwatch.metrics.registry import METRICS
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.watch.watch import Watch
 
 

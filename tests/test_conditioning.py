@@ -16,7 +16,8 @@ from gimwatch.metrics.conditioning import (
     udut_pivots,
 )
 from gimwatch.model.inertia import gim
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 PHI_EQ7 = np.array([-86.6015, -48.7133, -21.6504, -5.4126])
 QDD_EQ8 = np.array([-6.2189, 7.8864, -2.1226, 0.6071])

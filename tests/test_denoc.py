@@ -22,7 +22,8 @@ from gimwatch.denoc import DenocModel
 from gimwatch.denoc.tree import read_body_tree
 from gimwatch.errors import ConditioningError, InputError, URDFError, URDFWarning
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.stress.reference_tree import TreeReference
 
 DENOC_DIR = Path(__file__).resolve().parents[1] / "gimwatch" / "denoc"

@@ -9,7 +9,8 @@ import pytest
 from gimwatch.denoc import DenocModel
 from gimwatch.denoc.tree import FREE_FLYER_NAME
 from gimwatch.model.denoc_input import instantaneous_urdf, urdf_of_model
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.watch import Watch
 
 

@@ -6,7 +6,8 @@ import pytest
 
 from gimwatch.crosscheck import denoc_model
 from gimwatch.errors import ConditioningError
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 CASES = [("chain:20", False), ("ur5", False), ("ur5", True), ("solo12", True), ("talos", True)]
 GRAVITY = np.array([0.3, -9.81, 0.1])

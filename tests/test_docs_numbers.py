@@ -408,7 +408,8 @@ def _run_json(main, argv) -> str:
 
 
 def _urdf_robots() -> list[str]:
-    from gimwatch.model.robots import RobotError, example_robot_names, example_robot_urdf
+    from gimwatch.errors import RobotError
+    from gimwatch.model.example_robots import example_robot_names, example_robot_urdf
 
     names = []
     for name in example_robot_names():
@@ -421,7 +422,7 @@ def _urdf_robots() -> list[str]:
 
 
 def test_robot_counts_are_the_library_and_survey_counts():
-    from gimwatch.model.robots import example_robot_names
+    from gimwatch.model.example_robots import example_robot_names
 
     everything = len(example_robot_names())
     readme = _find("README.md", r"one of the\s+(\d+) robots of example-robot-data")
@@ -446,8 +447,8 @@ def test_triangle_inequality_warning_count_is_the_robots_that_warn():
     import warnings
 
     from gimwatch.errors import URDFWarning
+    from gimwatch.model.example_robots import example_robot_urdf
     from gimwatch.model.robot_files import read_robot_file
-    from gimwatch.model.robots import example_robot_urdf
     from gimwatch.model.urdf_text import check_urdf
 
     warned = []

@@ -20,7 +20,8 @@ from gimwatch.metrics.equilibrated import ScaledProducts, equilibrated_dense
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.metrics.tracker import KappaTracker, PinocchioProducts
 from gimwatch.model.inertia import gim_diagonal
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.watch.sources import GivenMatrix
 
 UNITS = Path(__file__).parent / "data" / "units"

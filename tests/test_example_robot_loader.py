@@ -17,12 +17,9 @@ import pinocchio as pin
 import pytest
 
 from gimwatch.errors import ExampleRobotWarning, GimwatchError
-from gimwatch.model.robots import (
-    EXAMPLE_ROBOT_NOTES,
-    default_floating,
-    example_robot_names,
-    load_robot,
-)
+from gimwatch.model.example_robots import EXAMPLE_ROBOT_NOTES, example_robot_names
+from gimwatch.model.robot_spec import default_floating
+from gimwatch.model.robots import load_robot
 
 example_robot_data = pytest.importorskip("example_robot_data")
 

@@ -10,7 +10,8 @@ from gimwatch.bench import mujoco_peer
 from gimwatch.errors import InputError
 from gimwatch.explain.armature import minimal_armature
 from gimwatch.model.chains import chain_spec
-from gimwatch.model.robots import chain_robot, load_robot, random_configurations
+from gimwatch.model.robots import chain_robot, load_robot
+from gimwatch.model.sampling import random_configurations
 
 
 def _kappa(robot, q, added):

@@ -10,7 +10,8 @@ import pytest
 from conftest import planar_rod_chain_gim
 
 from gimwatch.cli import main
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 
 def test_explain_prints_modes_and_ranked_sensitivities(capsys):

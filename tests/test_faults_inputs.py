@@ -16,7 +16,8 @@ from gimwatch.crosscheck import check_tolerance, crosscheck_robot
 from gimwatch.errors import ConditioningError, GimwatchError, InputError, URDFError
 from gimwatch.metrics.conditioning import condition_number, diagonal_ratio
 from gimwatch.metrics.dense_analysis import analyze_configuration
-from gimwatch.model.robots import as_configuration, load_robot
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import load_robot
 from gimwatch.model.urdf_text import DEFAULT_MAX_LINKS, MAX_TAG_CHARS
 
 REPO = Path(__file__).resolve().parents[1]

@@ -20,12 +20,8 @@ from hypothesis import strategies as st
 from gimwatch.errors import GimwatchError
 from gimwatch.metrics.dense_analysis import analyze_configuration
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
-from gimwatch.model.robots import (
-    DATA_NV_LIMIT,
-    example_robot_urdf,
-    load_robot,
-    neutral_configuration,
-)
+from gimwatch.model.example_robots import example_robot_urdf
+from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, neutral_configuration
 
 SEEDS = {
     "chain": generate_chain_urdf(chain_spec(3, axes="spatial", joint_types="revolute")),

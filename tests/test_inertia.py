@@ -6,7 +6,8 @@ from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, planar_rod_chain_gim
 from gimwatch.metrics.conditioning import condition_number, diagonal_ratio
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
 from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.robots import load_robot, neutral_configuration, random_configurations
+from gimwatch.model.robots import load_robot, neutral_configuration
+from gimwatch.model.sampling import random_configurations
 
 
 def test_straight_paper_chain_matches_closed_form_and_paper_numbers():

@@ -7,7 +7,8 @@ from closed_forms import straight_chain_extreme_eigenvalues
 from gimwatch.bench.krylov_peers import gim_inverse_operator, gim_operator, kappa_matrix_free
 from gimwatch.errors import InputError
 from gimwatch.model.inertia import gim
-from gimwatch.model.robots import load_robot, neutral_configuration, random_configurations
+from gimwatch.model.robots import load_robot, neutral_configuration
+from gimwatch.model.sampling import random_configurations
 
 
 @pytest.mark.parametrize("spec", ["chain:7", "ur5", "panda"])

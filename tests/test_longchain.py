@@ -15,7 +15,8 @@ from gimwatch.errors import BackendWarning
 from gimwatch.metrics.linear_analysis import analyze_linear, chain_configurations
 from gimwatch.metrics.tracker import extreme_eigenvalues
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
-from gimwatch.model.robots import Robot, load_robot, random_configurations
+from gimwatch.model.robots import Robot, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import run_scene
 from gimwatch.stress.reference_planar import PlanarChainReference

@@ -13,7 +13,8 @@ from gimwatch.metrics.mass_matrix_sources import DenocDiagonal, DenocLinear, Pin
 from gimwatch.metrics.registry import METRICS, GimState, Metric, evaluate
 from gimwatch.model.mass_matrix_source import MassMatrixSource
 from gimwatch.model.mujoco_model import compile_robot
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.backends import make_backend
 from gimwatch.watch.sources import GivenMatrix, MujocoSource
 from gimwatch.watch.watch import OPERATOR_METRICS, Watch

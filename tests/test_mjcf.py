@@ -15,18 +15,15 @@ import pytest
 from gimwatch.cli import main
 from gimwatch.crosscheck import crosscheck_robot
 from gimwatch.errors import GimwatchError, URDFError, URDFWarning
+from gimwatch.model.example_robots import example_robot_names
 from gimwatch.model.mujoco_model import (
     EXACT_COMPILER,
     MujocoRefusal,
     compile_robot,
     pinocchio_mass_matrix,
 )
-from gimwatch.model.robots import (
-    example_robot_names,
-    load_robot,
-    placeholder_limit_joints,
-    random_configurations,
-)
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import placeholder_limit_joints, random_configurations
 
 mujoco = pytest.importorskip("mujoco")
 

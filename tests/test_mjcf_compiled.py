@@ -14,7 +14,8 @@ from gimwatch.denoc import DenocModel
 from gimwatch.errors import URDFWarning
 from gimwatch.model.denoc_input import instantaneous_urdf
 from gimwatch.model.mjcf_coordinates import q_from_qpos, qpos_from_q
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 mujoco = pytest.importorskip("mujoco")
 

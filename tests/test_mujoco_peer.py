@@ -4,7 +4,8 @@ import pytest
 
 from gimwatch.bench import mujoco_peer
 from gimwatch.errors import InputError
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import run_scene
 

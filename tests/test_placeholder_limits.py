@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from gimwatch.cli import main
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.survey.run import run_survey
 
 SLIDER_ARM = Path(__file__).parent / "data" / "mjcf" / "slider_arm.xml"

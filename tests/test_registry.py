@@ -17,7 +17,8 @@ import pytest
 from gimwatch.denoc import DenocModel
 from gimwatch.metrics.mass_matrix_sources import DenocLinear, PinocchioSource
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.watch.sources import GivenMatrix
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -3,7 +3,8 @@ import pinocchio as pin
 import pytest
 
 from gimwatch.errors import InputError, RobotError, URDFError
-from gimwatch.model.robots import load_robot, neutral_configuration, random_configurations
+from gimwatch.model.robots import load_robot, neutral_configuration
+from gimwatch.model.sampling import random_configurations
 
 
 def test_chain_spec_loads_the_paper_chain():

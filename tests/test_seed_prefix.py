@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 
 from gimwatch.metrics.linear_analysis import chain_configurations
-from gimwatch.model.robots import load_robot, parse_chain_spec, random_configurations
+from gimwatch.model.robot_spec import parse_chain_spec
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 ROOT = Path(__file__).resolve().parents[1]
 

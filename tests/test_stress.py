@@ -10,7 +10,8 @@ from closed_forms import rod_chain_gim
 from gimwatch.cli import main
 from gimwatch.denoc.tree import read_body_tree
 from gimwatch.model.chains import chain_spec
-from gimwatch.model.robots import chain_robot, load_robot, random_configurations
+from gimwatch.model.robots import chain_robot, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.stress.cases import CASES
 from gimwatch.stress.reference_planar import PlanarChainReference
 from gimwatch.stress.reference_tree import TreeReference

@@ -3,7 +3,9 @@ import pytest
 from conftest import EXAMPLE_ROBOTS, NO_DOF_WHEN_FIXED, SINGULAR_GIM, planar_rod_chain_gim
 
 from gimwatch.crosscheck import denoc_model
-from gimwatch.model.robots import default_floating, load_robot, random_configurations
+from gimwatch.model.robot_spec import default_floating
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.survey.run import DOF_METRICS, METRICS, run_survey, sample_metrics
 from gimwatch.survey.trajectory import FLOATING_REASON, TrajectorySettings
 

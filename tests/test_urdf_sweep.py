@@ -75,7 +75,8 @@ def test_denoc_reads_the_lenient_files_as_pinocchio_does(name):
 
     from gimwatch.metrics.denoc_robot import denoc_model
     from gimwatch.model.inertia import gim
-    from gimwatch.model.robots import load_robot, random_configurations
+    from gimwatch.model.robots import load_robot
+    from gimwatch.model.sampling import random_configurations
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -6,7 +6,8 @@ import scipy.linalg
 from conftest import planar_rod_chain_gim
 
 from gimwatch.metrics.registry import KappaLanczos
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import run_scene
 from gimwatch.watch.watch import METRICS, Watch, estimator_quality

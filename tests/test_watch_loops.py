@@ -12,7 +12,8 @@ import pytest
 from gimwatch.errors import IllConditionedWarning, InputError
 from gimwatch.model.inertia import gim
 from gimwatch.model.mujoco_model import _joint_maps, compile_robot
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.watch.alarm import DEFAULT_ALARM_THRESHOLD
 from gimwatch.watch.watch import Watch
 

@@ -9,7 +9,8 @@ import pytest
 from gimwatch.errors import GimwatchError
 from gimwatch.model.inertia import gim
 from gimwatch.model.mujoco_model import _joint_maps, compile_robot
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.watch.sources import GivenMatrix, MujocoSource, robot_from_model
 
 

@@ -30,7 +30,8 @@ from gimwatch.bench.plots import EPS, plot_accuracy_vs_kappa
 from gimwatch.bench.report import markdown_table
 from gimwatch.metrics.conditioning import condition_number
 from gimwatch.model.chains import chain_spec
-from gimwatch.model.robots import Robot, random_configurations
+from gimwatch.model.robots import Robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.stress.reference_planar import PlanarChainReference
 
 __all__ = ["COLUMNS", "FAMILIES", "FULL_SIZES", "QUICK_SIZES", "run"]

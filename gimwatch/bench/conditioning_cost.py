@@ -36,7 +36,8 @@ from gimwatch.metrics.conditioning import (
     extreme_ratio,
 )
 from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 __all__ = ["COLUMNS", "COMPARISON", "FULL_SIZES", "QUICK_SIZES", "run"]
 

@@ -31,7 +31,8 @@ from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.crosscheck import denoc_model
 from gimwatch.model.chains import chain_spec, generate_chain_urdf
 from gimwatch.model.inertia import gim_diagonal
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 
 __all__ = ["COLUMNS", "COMPARISON", "FULL_SIZES", "QUICK_SIZES", "run"]
 

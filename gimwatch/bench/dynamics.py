@@ -27,7 +27,8 @@ from gimwatch.bench.plots import plot_dynamics_cost
 from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.errors import RobotError
-from gimwatch.model.robots import DATA_NV_LIMIT, Robot, load_robot, random_configurations
+from gimwatch.model.robots import DATA_NV_LIMIT, Robot, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.backends import BACKENDS
 
 __all__ = ["COLUMNS", "COMPARISON", "FULL_SIZES", "QUICK_SIZES", "run"]

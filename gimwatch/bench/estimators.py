@@ -42,7 +42,8 @@ from gimwatch.metrics.conditioning import (
     pivot_ratio_forward,
 )
 from gimwatch.model.inertia import gim, gim_diagonal
-from gimwatch.model.robots import Robot, load_robot, random_configurations
+from gimwatch.model.robots import Robot, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.scene import parse_scene
 from gimwatch.simulation.simulate import run_scene
 

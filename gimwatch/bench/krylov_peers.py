@@ -33,7 +33,8 @@ import scipy.linalg
 from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
 from gimwatch.errors import ConditioningError, InputError
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import Robot
 
 __all__ = [
     "MatrixFreeKappa",

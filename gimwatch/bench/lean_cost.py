@@ -39,7 +39,8 @@ from gimwatch.bench.report import markdown_table
 from gimwatch.bench.timing import data_if_it_fits
 from gimwatch.metrics.conditioning import diagonal_ratio
 from gimwatch.model.inertia import gim_diagonal
-from gimwatch.model.robots import load_robot, random_configurations
+from gimwatch.model.robots import load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.simulation.backends import DenocBackend
 from gimwatch.watch.watch import Watch
 

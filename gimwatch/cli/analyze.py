@@ -16,7 +16,8 @@ from gimwatch.cli._format import (
 from gimwatch.cli._progress import ItemProgress
 from gimwatch.cli._records import add_output_arguments, csv_text, json_text
 from gimwatch.errors import GimwatchError, InputError
-from gimwatch.metrics.analyze import analyze, choose_path
+from gimwatch.metrics.analyze import Analysis, analyze, resolve_robot
+from gimwatch.model.robot_spec import RobotSpec
 from gimwatch.model.robots import DATA_NV_LIMIT
 from gimwatch.model.sampling import placeholder_note
 
@@ -103,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
         analysis = _analysis(specs[0], args)
         _notes(analysis)
         if args.explain:
-            return _print_explained(specs[0], analysis, args)
+            return _print_explained(analysis, args)
         return _print_one(analysis, args)
     if args.explain:
         raise InputError("--explain", "used with one robot", f"{len(specs)} robots")
@@ -123,32 +124,23 @@ def run(args: argparse.Namespace) -> int:
     return 2 if any(reason for _, _, reason in blocks) else 0
 
 
-def _analysis(spec: str, args: argparse.Namespace):
-    linear = (
-        choose_path(
-            spec,
-            floating=args.floating,
-            backend=args.backend,
-            body=args.body,
-            armature=not args.no_armature,
-        )
-        == "denoc"
-    )
+def _analysis(spec: str, args: argparse.Namespace) -> Analysis:
+    """The robot parsed once, loaded at most once (to choose the path), then analysed."""
+    parsed = RobotSpec.parse(spec, args.floating, body=args.body, armature=not args.no_armature)
+    path, robot = resolve_robot(parsed, args.backend)
+    linear = path == "denoc"
     if args.metrics is not None and not linear:
         raise InputError("--metrics", "used with the O(n) path (--backend denoc)", args.metrics)
     if args.explain and (linear or args.csv):
         raise InputError("--explain", "used on the dense path, without --csv", True)
     return analyze(
-        spec,
+        robot,
         args.q,
         random=args.random,
         seed=args.seed,
-        floating=args.floating,
         backend=args.backend,
         metrics=None if args.metrics is None else args.metrics.split(","),
         key="--q",
-        body=args.body,
-        armature=not args.no_armature,
     )
 
 
@@ -267,19 +259,13 @@ def _print_batch(blocks, args: argparse.Namespace) -> None:
     )
 
 
-def _print_explained(spec: str, analysis, args: argparse.Namespace) -> int:
+def _print_explained(analysis: Analysis, args: argparse.Namespace) -> int:
     """``--explain``: the analysis, and the modes of λmin and λmax at each configuration."""
     from gimwatch.cli.explain import mode_lines
     from gimwatch.explain.modes import gim_modes
-    from gimwatch.model.robots import load_robot
 
-    robot = load_robot(
-        spec,
-        floating=analysis.floating,
-        max_nv=DATA_NV_LIMIT,
-        body=args.body,
-        armature=not args.no_armature,
-    )
+    robot = analysis.robot  # the robot analysed: the dense path always loads it
+    assert robot is not None
     modes = [gim_modes(robot, r.q) for r in analysis.results]
     if args.json:
         records = [

@@ -12,7 +12,8 @@ from gimwatch.errors import InputError
 from gimwatch.explain.armature import MAX_MATRIX_BYTES, max_configurations, minimal_armature
 from gimwatch.joint_kinds import length_velocities
 from gimwatch.model.configuration import user_configuration
-from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, random_configurations
+from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.stability.step_maps import INTEGRATORS
 
 NAME = "armature"

@@ -29,7 +29,8 @@ from gimwatch.crosscheck import (
     crosscheck_robot,
 )
 from gimwatch.errors import GimwatchError
-from gimwatch.model.robots import example_robot_names, load_robot
+from gimwatch.model.example_robots import example_robot_names
+from gimwatch.model.robots import load_robot
 
 NAME = "crosscheck"
 

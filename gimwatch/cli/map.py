@@ -11,10 +11,11 @@ from tqdm import tqdm
 from gimwatch.cli._format import check_workers, positive_int
 from gimwatch.errors import InputError
 from gimwatch.explain.map_files import write_map, write_trajectory_metrics
-from gimwatch.explain.maps import MAX_GRID, conditioning_map
-from gimwatch.explain.trajectory import trajectory_metrics
+from gimwatch.explain.maps import MAX_GRID, ConditioningMap, conditioning_map
+from gimwatch.explain.trajectory import TrajectoryMetrics, trajectory_metrics
+from gimwatch.metrics.analyze import RobotLike, robot_for_path
 from gimwatch.model.configuration import user_configuration
-from gimwatch.model.robots import load_robot
+from gimwatch.model.robot_spec import RobotSpec
 
 NAME = "map"
 #: Library parameters named otherwise on this command line (see `gimwatch.cli.parameter_options`).
@@ -74,22 +75,25 @@ def run(args: argparse.Namespace) -> int:
             "scheduler": args.scheduler,
             "progress": progress,
         }
+        robot: RobotLike = RobotSpec.parse(args.robot)  # parsed once, loaded at most once
+        result: ConditioningMap | TrajectoryMetrics
         if args.trajectory is not None:
-            result = trajectory_metrics(args.robot, args.trajectory, **common)
+            result = trajectory_metrics(robot, args.trajectory, **common)
         else:
             q = None
             if args.q is not None:
-                q = user_configuration(load_robot(args.robot), args.q, key="--q")
+                robot = robot_for_path(robot)
+                q = user_configuration(robot, args.q, key="--q")
             ranges = None if args.range is None else [args.range[:2], args.range[2:]]
             result = conditioning_map(
-                args.robot, args.joints, grid=args.grid, ranges=ranges, q=q, **common
+                robot, args.joints, grid=args.grid, ranges=ranges, q=q, **common
             )
     if result.interrupted:
         print("gimwatch: interrupted: writing the part computed (NaN elsewhere)", file=sys.stderr)
     written = (
-        write_trajectory_metrics(result, args.output)
-        if args.trajectory is not None
-        else write_map(result, args.output)
+        write_map(result, args.output)
+        if isinstance(result, ConditioningMap)
+        else write_trajectory_metrics(result, args.output)
     )
     for metric, values in result.values.items():
         low, high = np.nanmin(values), np.nanmax(values)

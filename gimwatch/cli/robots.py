@@ -29,11 +29,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def robot_rows() -> list[dict]:
     """One row per example-robot-data robot: name, nv, base, source, problem ("" if none)."""
     from gimwatch.errors import GimwatchError
-    from gimwatch.model.robots import example_robot_names, load_robot
+    from gimwatch.model.example_robots import example_robot_names
+    from gimwatch.model.robots import load_robot
 
     rows = []
     for name in example_robot_names():
-        row = {"name": name, "nv": None, "base": "", "source": "", "problem": ""}
+        row: dict[str, object] = {"name": name, "nv": None, "base": "", "source": ""}
+        row["problem"] = ""
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # suspicious inertias are analyze's business
             for floating in (None, True):  # the default base; a free-flyer if it has no joint

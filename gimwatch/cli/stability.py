@@ -12,7 +12,8 @@ from gimwatch.cli._format import non_negative_int, positive_int, table
 from gimwatch.cli._records import json_text
 from gimwatch.errors import GimwatchError, InputError
 from gimwatch.model.configuration import user_configuration
-from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, random_configurations
+from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
+from gimwatch.model.sampling import random_configurations
 from gimwatch.stability.analysis import stability
 from gimwatch.stability.step_maps import INTEGRATORS
 
@@ -120,12 +121,12 @@ def _h(value: float) -> str:
 
 def _print(results, args: argparse.Namespace) -> None:
     if args.json:
-        rows = []
+        records_json: list[dict] = []
         for spec, records, reason in results:
             if reason:
-                rows.append({"robot": spec, "status": "refused", "reason": reason})
-            rows.extend(r.to_dict() for r in records)
-        print(json_text({"rows": rows}))
+                records_json.append({"robot": spec, "status": "refused", "reason": reason})
+            records_json.extend(r.to_dict() for r in records)
+        print(json_text({"rows": records_json}))
         return
     headers = [
         "robot",
@@ -138,7 +139,8 @@ def _print(results, args: argparse.Namespace) -> None:
         "critical_dof",
         "limited_by",
     ]
-    rows, notes = [], {}
+    rows: list[list[object]] = []
+    notes: dict[str, tuple[str, ...]] = {}
     for spec, records, reason in results:
         if reason:
             print(f"{spec}: refused: {reason}", file=sys.stderr)

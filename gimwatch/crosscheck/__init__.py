@@ -38,13 +38,13 @@ from gimwatch.crosscheck.reference import PinocchioReference, check_tolerance
 from gimwatch.crosscheck.subjects import State, Subjects, choose_subjects
 from gimwatch.metrics.conditioning import warn_if_ill_conditioned
 from gimwatch.metrics.denoc_robot import denoc_model
-from gimwatch.model.robots import (
-    EXAMPLE_ROBOT_NOTES,
-    Robot,
+from gimwatch.model.example_robots import EXAMPLE_ROBOT_NOTES
+from gimwatch.model.robots import Robot
+from gimwatch.model.sampling import (
     placeholder_limit_joints,
+    placeholder_note,
     random_configurations,
 )
-from gimwatch.model.sampling import placeholder_note
 
 __all__ = [
     "DEFAULT_TOLERANCE",

@@ -37,7 +37,8 @@ from gimwatch.errors import ConditioningError, InputError
 from gimwatch.joint_kinds import JointKind, joint_kind
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import Robot
 
 __all__ = [
     "MAX_MATRIX_BYTES",

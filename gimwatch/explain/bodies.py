@@ -16,7 +16,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import Robot
 
 __all__ = ["BodySplit", "body_energies", "body_names", "body_split", "dof_joint_ranges"]
 

@@ -29,13 +29,14 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.joint_kinds import JointKind, joint_kind
-from gimwatch.metrics.analyze import choose_path, robot_for_path
+from gimwatch.metrics.analyze import RobotLike, choose_path, robot_for_path, spec_of
 from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.metrics.dense_analysis import check_massless
 from gimwatch.metrics.linear_analysis import LINEAR_METRICS
 from gimwatch.metrics.registry import METRICS, GimState, evaluate
 from gimwatch.model.q_checks import as_configurations
-from gimwatch.model.robots import DATA_NV_LIMIT, load_robot, parse_chain_spec
+from gimwatch.model.robot_spec import RobotSpec, robot_spec
+from gimwatch.model.robots import DATA_NV_LIMIT, load_robot
 from gimwatch.model.sampling import is_real_limit
 from gimwatch.suggest import did_you_mean
 from gimwatch.survey.sweep import Task, run_sweep
@@ -84,16 +85,19 @@ def check_metrics(metrics: Sequence[str], path: str) -> tuple[str, ...]:
     return tuple(metrics)
 
 
-@functools.lru_cache(maxsize=4)
-def _robot(spec: str):
-    return load_robot(spec, max_nv=DATA_NV_LIMIT)
+def _robot(spec: RobotSpec):
+    """The dense path's robot: the one choose_path read or the caller gave (loaded once)."""
+    chain = spec.chain
+    if chain is not None and chain.n + 6 * spec.floating > DATA_NV_LIMIT:
+        return load_robot(spec, max_nv=DATA_NV_LIMIT)  # refused, naming the O(n) path
+    return robot_for_path(spec)
 
 
 @functools.lru_cache(maxsize=2)
-def _linear_model(spec: str):
+def _linear_model(spec: RobotSpec):
     from gimwatch.denoc import DenocModel
 
-    chain = parse_chain_spec(spec)
+    chain = spec.chain
     if chain is not None:
         return DenocModel.from_chain(chain), chain.name
     robot = _file_robot(spec)
@@ -101,19 +105,20 @@ def _linear_model(spec: str):
 
 
 @functools.lru_cache(maxsize=2)
-def _file_robot(spec: str):
+def _file_robot(spec: RobotSpec):
     """A file's robot for the O(n) path: its Pinocchio Model, never a Data (any nv)."""
     return robot_for_path(spec)
 
 
 @functools.lru_cache(maxsize=2)
-def _lean(spec: str):
+def _lean(spec: RobotSpec):
     return _linear_model(spec)[0].lean()
 
 
-def robot_coordinates(spec: str, path: str) -> tuple[str, list[str]]:
+def robot_coordinates(spec: RobotSpec | str, path: str) -> tuple[str, list[str]]:
     """(robot name, names of the q coordinates in order) on ``path``."""
-    if path == "denoc" and parse_chain_spec(spec) is not None:
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
+    if path == "denoc" and spec.chain is not None:
         model, name = _linear_model(spec)
         return name, list(model.joint_names)
     from gimwatch.output.figures import joint_coordinate_units
@@ -122,11 +127,14 @@ def robot_coordinates(spec: str, path: str) -> tuple[str, list[str]]:
     return robot.name, joint_coordinate_units(robot.model)[0]
 
 
-def metrics_at(spec: str, path: str, qs: np.ndarray, metrics: tuple[str, ...]) -> np.ndarray:
+def metrics_at(
+    spec: RobotSpec | str, path: str, qs: np.ndarray, metrics: tuple[str, ...]
+) -> np.ndarray:
     """The metrics at each configuration of ``qs`` (K, nq): an array (len(metrics), K).
 
     Module-level and keyed by ``spec`` so that it can run in worker processes.
     """
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
     out = np.full((len(metrics), len(qs)), np.nan)
     if path == "denoc":
         from gimwatch.metrics.linear_analysis import analyze_linear
@@ -206,12 +214,15 @@ class ConditioningMap:
     interrupted: bool = False
 
 
-def checked_configurations(spec: str, path: str, qs: np.ndarray, *, name: str = "q") -> np.ndarray:
+def checked_configurations(
+    spec: RobotSpec | str, path: str, qs: np.ndarray, *, name: str = "q"
+) -> np.ndarray:
     """``qs`` (K, nq) checked as every q is checked (`gimwatch.model.q_checks`).
 
     Length and finiteness; on Pinocchio's path each (cos θ, sin θ) and quaternion of norm 1
     too (DeNOC's q are angles, without unit blocks).
     """
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
     if path != "denoc":
         return as_configurations(_robot(spec), qs, name=name)
     size = len(_linear_model(spec)[0].joint_names)
@@ -221,16 +232,17 @@ def checked_configurations(spec: str, path: str, qs: np.ndarray, *, name: str = 
 
 
 def map_axes(
-    spec: str, path: str, joints: Sequence[str]
+    spec: RobotSpec | str, path: str, joints: Sequence[str]
 ) -> tuple[str, list[int], list[str], list[tuple[float, float]], np.ndarray]:
     """(robot name, q index, unit, (lower, upper)) of each named joint, and the neutral q.
 
     Raises:
         InputError: Unknown joints, a joint named twice, or a joint not of one coordinate.
     """
+    spec = robot_spec(spec)  # a RobotSpec as given, a caller's text parsed
     if len(joints) != 2 or joints[0] == joints[1]:
         raise InputError("joints", "two different joint names", list(joints))
-    chain = parse_chain_spec(spec)
+    chain = spec.chain
     if path == "denoc" and chain is not None:
         model, name = _linear_model(spec)
         names = list(model.joint_names)
@@ -356,7 +368,7 @@ def _check_ranges(ranges) -> list[tuple[float, float]]:
 
 
 def conditioning_map(
-    spec: str,
+    spec: RobotLike,
     joints: Sequence[str],
     *,
     grid: int = 50,
@@ -369,7 +381,8 @@ def conditioning_map(
     """Metrics of M over a ``grid`` × ``grid`` map of two joints.
 
     Args:
-        spec: The robot (``chain:N``, a URDF path, an example-robot-data name).
+        spec: The robot: a `Robot`, a `RobotSpec`, or ``chain:N``, a URDF path, an
+            example-robot-data name (parsed and loaded once).
         joints: The two joints to sweep, by name (x then y).
         grid: Points per side, 2 to `MAX_GRID`.
         ranges: (lower, upper) per joint (default: its limits; ±π rad or ±1 m when none).
@@ -386,6 +399,7 @@ def conditioning_map(
         or not 2 <= grid <= MAX_GRID
     ):
         raise InputError("grid", f"an integer from 2 to {MAX_GRID}", grid)
+    spec = spec_of(spec)
     path = choose_path(spec, backend=backend)
     metrics = check_metrics(list(metrics), path)
     name, axes, units, limits, base_q = map_axes(spec, path, joints)

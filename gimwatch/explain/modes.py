@@ -24,7 +24,8 @@ from gimwatch.errors import InputError
 from gimwatch.explain.bodies import body_energies, body_names, body_split, dof_joint_ranges
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import Robot
 
 __all__ = ["GimModes", "Mode", "gim_modes"]
 

@@ -37,7 +37,8 @@ from gimwatch.explain.bodies import BodySplit, body_names, body_split, dof_joint
 from gimwatch.joint_kinds import length_velocities
 from gimwatch.metrics.conditioning import extreme_ratio
 from gimwatch.metrics.dense_analysis import check_robot_gim
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import Robot
 
 __all__ = [
     "CLUSTER_RTOL",

@@ -28,7 +28,7 @@ from gimwatch.explain.maps import (
     robot_coordinates,
     run_chunks,
 )
-from gimwatch.metrics.analyze import choose_path
+from gimwatch.metrics.analyze import RobotLike, choose_path, spec_of
 from gimwatch.survey.sweep import Task
 
 __all__ = [
@@ -200,7 +200,7 @@ class TrajectoryMetrics:
 
 
 def trajectory_metrics(
-    spec: str,
+    spec: RobotLike,
     trajectory: str | Path,
     *,
     metrics: Sequence[str] = ("kappa", "diagonal_ratio"),
@@ -209,7 +209,11 @@ def trajectory_metrics(
     scheduler: str | None = None,
     progress: Callable[[float], None] | None = None,
 ) -> TrajectoryMetrics:
-    """Metrics of M(q) at every row of a trajectory CSV (see the module docstring)."""
+    """Metrics of M(q) at every row of a trajectory CSV (see the module docstring).
+
+    ``spec`` is a `Robot`, a `RobotSpec` or a robot's text (parsed and loaded once).
+    """
+    spec = spec_of(spec)
     path = choose_path(spec, backend=backend)
     metrics = check_metrics(list(metrics), path)
     name, coordinates = robot_coordinates(spec, path)

@@ -13,7 +13,8 @@ from gimwatch.metrics.conditioning import check_gim, warn_if_ill_conditioned
 from gimwatch.metrics.mass_matrix_sources import PinocchioSource
 from gimwatch.metrics.registry import GimState, evaluate
 from gimwatch.model.inertia import gim
-from gimwatch.model.robots import Robot, as_configuration
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robots import Robot
 
 __all__ = [
     "ANALYSIS_METRICS",

@@ -38,7 +38,7 @@ def chain_configurations(spec: ChainSpec, count: int, *, seed: int | None) -> np
 
     The chain's limits (`ChainSpec.position_limits`, those its URDF writes) drawn by
     `gimwatch.model.sampling.uniform_in_limits`, as
-    [`random_configurations`][gimwatch.model.robots.random_configurations] draws them for the
+    [`random_configurations`][gimwatch.model.sampling.random_configurations] draws them for the
     same chain and seed, without building a Pinocchio model.
     """
     if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 1:

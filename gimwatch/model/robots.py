@@ -23,8 +23,6 @@ when they need it.
 
 from __future__ import annotations
 
-import difflib
-import re
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,45 +33,21 @@ import pinocchio as pin
 from gimwatch.errors import ExampleRobotWarning, InputError, RobotError, URDFError
 from gimwatch.joint_kinds import JointKind, joint_kind
 from gimwatch.model.captured_output import captured_c_output
-from gimwatch.model.chains import ChainSpec, chain_spec, generate_chain_urdf
-from gimwatch.model.example_robots import (
-    EXAMPLE_ROBOT_NOTES,
-    example_robot_loaders,
-    example_robot_names,
-    example_robot_urdf,
-)
+from gimwatch.model.chains import ChainSpec, generate_chain_urdf
+from gimwatch.model.example_robots import EXAMPLE_ROBOT_NOTES, example_robot_urdf
 from gimwatch.model.mjcf_model import is_mjcf
-from gimwatch.model.q_checks import UNIT_NORM_TOLERANCE, as_configuration, unit_blocks
 from gimwatch.model.robot_files import read_robot_file
-from gimwatch.model.sampling import (
-    PLACEHOLDER_LIMIT,
-    check_random_budget,
-    placeholder_limit_joints,
-    random_configurations,
-)
+from gimwatch.model.robot_spec import RobotSpec, robot_spec
 
 __all__ = [
-    "EXAMPLE_ROBOT_NOTES",
-    "PLACEHOLDER_LIMIT",
-    "UNIT_NORM_TOLERANCE",
+    "DATA_NV_LIMIT",
+    "MAX_TREE_DEPTH",
     "Robot",
-    "as_configuration",
-    "captured_c_output",
     "chain_robot",
-    "check_random_budget",
-    "default_floating",
-    "display_name",
-    "example_robot_names",
-    "is_mjcf",
     "load_robot",
     "neutral_configuration",
-    "parse_chain_spec",
-    "placeholder_limit_joints",
-    "random_configurations",
-    "unit_blocks",
 ]
 
-_CHAIN_SPEC = re.compile(r"^chain:(\S+)$")
 #: Above this many velocity coordinates, a Pinocchio Data would need several GB.
 DATA_NV_LIMIT = 400
 #: Pinocchio's URDF parser recurses once per link along a branch and overflows the 8 MB
@@ -104,6 +78,8 @@ class Robot:
         mjcf_body: For MJCF, the body whose subtree was selected ("" for the whole model).
         mjcf_armature: For MJCF, whether MuJoCo's ``dof_armature`` is in M (as in MuJoCo).
         mujoco_joints: For MJCF, MuJoCo's joint id of each Pinocchio joint, else ().
+        robot_spec: The parsed [`RobotSpec`][gimwatch.model.robot_spec.RobotSpec] it was
+            loaded from (None for a Robot made by hand).
         dof_names: One name per velocity coordinate (``joint[k]`` for a joint of several).
         free_base: Whether the whole tree moves on one free joint at its root: the
             free-flyer gimwatch added (``floating``) or, in an MJCF file, the file's own free
@@ -121,6 +97,7 @@ class Robot:
     mjcf_body: str = ""
     mjcf_armature: bool = True
     mujoco_joints: tuple[int, ...] = ()
+    robot_spec: RobotSpec | None = None
     dof_names: tuple[str, ...] = field(init=False)
     free_base: bool = field(init=False)
 
@@ -220,42 +197,34 @@ def _too_large(spec: str, nv: int) -> RobotError:
     )
 
 
-def display_name(text: str) -> str:
-    r"""``text`` printable as UTF-8, whatever bytes a file name holds.
-
-    Bytes of a file name that are not UTF-8 (Python keeps them as lone surrogates) become
-    ``\xNN``, so figure titles, tables and JSON never fail on them.
-    """
-    return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
-
-
 def _too_deep(spec: str) -> RobotError:
     return RobotError(
         spec, f"Pinocchio's URDF parser reads at most {MAX_TREE_DEPTH} links in a chain"
     )
 
 
-def _mjcf_robot(
-    xml: str, source: str, name: str, spec: str, floating: bool, body: str, armature: bool
-) -> Robot:
+def _mjcf_robot(xml: str, parsed: RobotSpec) -> Robot:
     from gimwatch.model.mjcf_robot import read_mjcf
 
-    model, joint_ids, urdf_xml = read_mjcf(source, floating=floating, body=body, armature=armature)
+    body = parsed.body
+    model, joint_ids, urdf_xml = read_mjcf(
+        parsed.text, floating=parsed.floating, body=body, armature=parsed.armature
+    )
     return _robot(
         model,
-        name=f"{name}[{body}]" if body else name,  # reports say which subtree was read
-        spec=spec,
+        parsed,
+        name=f"{parsed.name}[{body}]" if body else parsed.name,  # reports name the subtree
         urdf_xml=urdf_xml,
-        source=source,
-        floating=floating,
+        source=parsed.text,
+        floating=parsed.floating,
         mjcf_xml=xml,
         mjcf_body=body,
-        mjcf_armature=armature,
+        mjcf_armature=parsed.armature,
         mujoco_joints=joint_ids,
     )
 
 
-def _robot(model: pin.Model, *, spec: str, **fields) -> Robot:
+def _robot(model: pin.Model, parsed: RobotSpec, **fields) -> Robot:
     """The one place a `Robot` is made, from a URDF's or an MJCF's Pinocchio model.
 
     Raises:
@@ -263,98 +232,70 @@ def _robot(model: pin.Model, *, spec: str, **fields) -> Robot:
     """
     if model.nv == 0:
         raise RobotError(
-            spec, "has no degree of freedom with a fixed base; load it with a floating base"
+            parsed.text, "has no degree of freedom with a fixed base; load it with a floating base"
         )
-    return Robot(model=model, spec=spec, **fields)
-
-
-def parse_chain_spec(spec: str | Path) -> ChainSpec | None:
-    """The `ChainSpec` of a ``chain:N`` specification, or None for other specs."""
-    match = _CHAIN_SPEC.match(str(spec))
-    if not match:
-        return None
-    try:
-        n = int(match.group(1))
-    except ValueError:
-        raise InputError("the N of chain:N", "a positive integer", match.group(1)) from None
-    return chain_spec(n)
-
-
-def default_floating(spec: str | Path) -> bool:
-    """The base a robot gets when none is asked for: True for a free-flyer.
-
-    An example-robot-data robot gets its loader's (``free_flyer``: legged robots, humanoids,
-    drones), so that ``load_robot(name)`` has the nq and nv of ``example_robot_data.load``;
-    chains and files get a fixed base.
-    """
-    loader = example_robot_loaders().get(str(spec))
-    return bool(getattr(loader, "free_flyer", False)) if loader is not None else False
+    return Robot(model=model, spec=parsed.text, robot_spec=parsed, **fields)
 
 
 def load_robot(
-    spec: str | Path,
+    spec: RobotSpec | str | Path,
     floating: bool | None = None,
     *,
     max_nv: int | None = None,
-    body: str = "",
-    armature: bool = True,
+    body: str | None = None,
+    armature: bool | None = None,
 ) -> Robot:
-    """Load a robot from ``chain:N``, a URDF path or an example-robot-data name.
+    """Load a robot from its `RobotSpec`, or from ``chain:N``, a URDF path or a robot's name.
 
     Args:
-        spec: The robot specification (see the module docstring).
+        spec: A parsed [`RobotSpec`][gimwatch.model.robot_spec.RobotSpec], or its text (parsed
+            here, once: see the module docstring).
         floating: True adds a free-flyer root joint (6 DoF), False fixes the base; None (the
-            default): `default_floating`, example-robot-data's base for its robots
-            (a free-flyer for ``anymal``, ``solo12``, ``talos``, ...), fixed otherwise.
+            default): the spec's (`default_floating`: example-robot-data's base for its
+            robots, a free-flyer for ``anymal``, ``solo12``, ``talos``, ...), fixed otherwise.
         max_nv: Refuse generated chains with more velocity coordinates than this before
             building anything (callers that will need a Pinocchio Data pass DATA_NV_LIMIT).
         body: MJCF only: read the subtree of this body (its ancestors held at ``qpos0``)
-            instead of the whole model.
-        armature: MJCF only: keep MuJoCo's ``dof_armature`` in M (False leaves it out).
+            instead of the whole model; None: the spec's ("" when parsed here).
+        armature: MJCF only: keep MuJoCo's ``dof_armature`` in M (False leaves it out);
+            None: the spec's (True when parsed here).
 
     Returns:
-        The loaded [`Robot`][gimwatch.model.robots.Robot].
+        The loaded [`Robot`][gimwatch.model.robots.Robot], which keeps its `RobotSpec`.
 
     Raises:
         RobotError: The spec names nothing loadable, or the model has no degree of freedom.
         URDFError: The URDF file is missing, unreadable or invalid.
     """
-    text = str(spec)
-    if not text.strip():
-        raise InputError("the robot", "chain:N, a URDF path or an example-robot-data name", text)
-    chain = parse_chain_spec(text)
-    if floating is None:
-        floating = chain is None and default_floating(text)
+    parsed = robot_spec(spec, floating=floating, body=body, armature=armature)
+    text, chain = parsed.text, parsed.chain
     if chain is not None:
         n = chain.n
-        if max_nv is not None and n + 6 * floating > max_nv:
-            raise _too_large(text, n + 6 * floating)
+        if max_nv is not None and n + 6 * parsed.floating > max_nv:
+            raise _too_large(text, n + 6 * parsed.floating)
         if n > MAX_TREE_DEPTH:
             raise _too_deep(text)
-        xml, source, name = generate_chain_urdf(chain), f"<generated {chain.name}>", chain.name
-    elif text in example_robot_loaders():
+        xml, source = generate_chain_urdf(chain), f"<generated {chain.name}>"
+    elif parsed.kind == "example":
         path = example_robot_urdf(text)
-        xml, source, name = read_robot_file(path), str(path), text
+        xml, source = read_robot_file(path), str(path)
         if text in EXAMPLE_ROBOT_NOTES:
             warnings.warn(f"{text}: {EXAMPLE_ROBOT_NOTES[text]}", ExampleRobotWarning, stacklevel=2)
-    elif text.lower().endswith((".urdf", ".xml")) or Path(text).exists() or "/" in text:
-        path = Path(text)
-        xml, source, name = read_robot_file(path), str(path), display_name(path.stem)
-        if is_mjcf(xml):
-            return _mjcf_robot(xml, source, name, text, floating, body, armature)
     else:
-        names = list(example_robot_loaders())
-        close = [n for n in names if n.lower() == text.lower()]  # UR5 -> ur5
-        close = close or difflib.get_close_matches(text.lower(), names, n=3)
-        hint = f"; did you mean {', '.join(close)}?" if close else ""
-        raise RobotError(
-            text, f"not chain:N, a URDF or MJCF file, or an example-robot-data robot{hint}"
-        )
-    if body:
-        raise InputError("body", "given only with an MJCF file", body)
-    model, xml = _build_model(xml, source, floating)
+        xml, source = read_robot_file(Path(text)), text
+        if is_mjcf(xml):
+            return _mjcf_robot(xml, parsed)
+    if parsed.body:
+        raise InputError("body", "given only with an MJCF file", parsed.body)
+    model, xml = _build_model(xml, source, parsed.floating)
     return _robot(
-        model, name=name, spec=text, urdf_xml=xml, source=source, floating=floating, chain=chain
+        model,
+        parsed,
+        name=parsed.name,
+        urdf_xml=xml,
+        source=source,
+        floating=parsed.floating,
+        chain=chain,
     )
 
 
@@ -369,14 +310,10 @@ def chain_robot(spec: ChainSpec, *, floating: bool = False) -> Robot:
     xml = generate_chain_urdf(spec)
     source = f"<generated {spec.name}>"
     model, xml = _build_model(xml, source, floating)
+    text = f"chain:{spec.n}"
+    parsed = RobotSpec(text, "chain", floating, spec)
     return _robot(
-        model,
-        name=spec.name,
-        spec=f"chain:{spec.n}",
-        urdf_xml=xml,
-        source=source,
-        floating=floating,
-        chain=spec,
+        model, parsed, name=spec.name, urdf_xml=xml, source=source, floating=floating, chain=spec
     )
 
 

@@ -73,7 +73,7 @@ def is_real_limit(limit: npt.ArrayLike) -> np.ndarray:
 def placeholder_limit_joints(robot: Robot) -> tuple[str, ...]:
     """Joints with a coordinate whose limit is a placeholder (|limit| >= 1e3 or infinite).
 
-    [`random_configurations`][gimwatch.model.robots.random_configurations] draws those coordinates
+    [`random_configurations`][gimwatch.model.sampling.random_configurations] draws those coordinates
     in ±π rad (angles) or ±1 m (translations, the free-flyer's position included) instead.
     Continuous joints and quaternions have no limit to read and are not listed.
     """
@@ -115,7 +115,7 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     """Configurations drawn uniformly within the joint limits, shape ``(count, nq)``.
 
     Unbounded coordinates, and those whose limit is a placeholder (|limit| >= 1e3, see
-    [`placeholder_limit_joints`][gimwatch.model.robots.placeholder_limit_joints]), are drawn in ±π
+    [`placeholder_limit_joints`][gimwatch.model.sampling.placeholder_limit_joints]), are drawn in ±π
     rad (angles) or ±1 m (translations); quaternions
     and the unit complex numbers of continuous joints are drawn uniformly on their sphere.
 

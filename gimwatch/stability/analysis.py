@@ -20,7 +20,9 @@ import pinocchio as pin
 
 from gimwatch.errors import InputError
 from gimwatch.model.configuration import user_configuration
-from gimwatch.model.robots import Robot, as_configuration, load_robot
+from gimwatch.model.q_checks import as_configuration
+from gimwatch.model.robot_spec import RobotSpec
+from gimwatch.model.robots import Robot, load_robot
 from gimwatch.stability.linear_system import LinearSystem, linearise
 from gimwatch.stability.servos import Servos, gain_servos, mjcf_servos
 from gimwatch.stability.step_maps import check_integrator
@@ -200,7 +202,7 @@ class HeldOptions(TypedDict, total=False):
 
 
 def stability(
-    robot: Robot | str,
+    robot: Robot | RobotSpec | str,
     configurations: npt.ArrayLike | None = None,
     *,
     integrators: Sequence[str] | None = None,
@@ -210,7 +212,8 @@ def stability(
     """h*, the verdict at the timestep and the critical mode, per configuration and integrator.
 
     Args:
-        robot: A `Robot` or its spec (chain:N, a URDF/MJCF path, an example-robot-data name).
+        robot: A `Robot`, its `RobotSpec`, or its text (chain:N, a URDF/MJCF path, an
+            example-robot-data name), parsed and loaded once.
         configurations: Held configurations (K, nq); default: keyframe 0, qpos0 or neutral.
         integrators: Names from `gimwatch.stability.step_maps.INTEGRATORS`; default: the
             model's own (``Euler`` without one).
@@ -224,7 +227,7 @@ def stability(
     Raises:
         InputError: An unknown integrator or keyframe, a timestep ≤ 0, no servos, bad gains.
     """
-    if isinstance(robot, str):
+    if not isinstance(robot, Robot):  # a spec: parsed and loaded once
         robot = load_robot(robot)
     if timestep_s is not None and not (np.isfinite(timestep_s) and timestep_s > 0):
         raise InputError("timestep_s", "a finite number > 0", timestep_s)

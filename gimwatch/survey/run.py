@@ -2,9 +2,9 @@
 
 For each robot, sample 0 is the neutral configuration (Pinocchio's ``neutral``: zero angles,
 identity quaternions) and samples 1..K are drawn uniformly within the joint limits with
-[`random_configurations`][gimwatch.model.robots.random_configurations] (seeded, all drawn up front,
-then cut into chunks), so the result does not depend on how the chunks are scheduled. At every
-sample the GIM M(q) comes from Pinocchio's CRBA and gives:
+[`random_configurations`][gimwatch.model.sampling.random_configurations] (seeded, all drawn up
+front, then cut into chunks), so the result does not depend on how the chunks are scheduled.
+At every sample the GIM M(q) comes from Pinocchio's CRBA and gives:
 
 * κ₂ = λmax/λmin (Shah & Saha 2013, Eq. 6) and δ = max M_ii / min M_ii (Sec. 4);
 * the forward (LDLᵀ) and backward (UDUᵀ) pivot ratios (Sec. 4, Fig. 4);
@@ -37,15 +37,11 @@ from gimwatch.metrics.dense_analysis import check_robot_gim
 from gimwatch.metrics.estimator_quality import correlations, estimator_quality
 from gimwatch.metrics.mass_matrix_sources import PinocchioSource
 from gimwatch.metrics.registry import GimState, evaluate
+from gimwatch.model.example_robots import example_robot_names
 from gimwatch.model.inertia import gim
-from gimwatch.model.robots import (
-    Robot,
-    example_robot_names,
-    load_robot,
-    neutral_configuration,
-    placeholder_limit_joints,
-)
-from gimwatch.model.robots import random_configurations as _random_configurations
+from gimwatch.model.robots import Robot, load_robot, neutral_configuration
+from gimwatch.model.sampling import placeholder_limit_joints
+from gimwatch.model.sampling import random_configurations as _random_configurations
 from gimwatch.survey.records import RobotFailure, RobotSurvey, SurveyResult, WorstConfiguration
 from gimwatch.survey.sweep import SweepOutcome, Task, run_sweep
 from gimwatch.survey.trajectory import (
@@ -261,7 +257,7 @@ def run_survey(
     Args:
         specs: Robot specifications; ``all`` means every example-robot-data robot.
         samples: K, random configurations per robot (>= 1), besides the neutral one.
-        seed: Seed of [`random_configurations`][gimwatch.model.robots.random_configurations] (same
+        seed: Seed of [`random_configurations`][gimwatch.model.sampling.random_configurations] (same
             for every robot).
         floating: True gives every robot a free-flyer base, False a fixed one; None (the
             default) each robot its own (`default_floating`: example-robot-data's base,
