@@ -724,11 +724,8 @@ def test_survey_prose_is_the_committed_survey():
     assert int(match.group(1)) == settings.max_steps
     match = _find(page, r"the watch samples κ\s+and δ every ([\d.]+) s")
     assert float(match.group(1)) == settings.sample_s
-    import inspect
+    from gimwatch.survey.run import DEFAULT_CHUNK_SIZE as chunk
 
-    from gimwatch.survey.run import run_survey
-
-    chunk = inspect.signature(run_survey).parameters["chunk_size"].default
     assert int(_find(page, r"cut into chunks of (\d+)\)").group(1)) == chunk
     assert (
         int(_find(page, r"survey all --fixed --samples (\d+) --trajectory").group(1))

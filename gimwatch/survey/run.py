@@ -230,6 +230,10 @@ def _worker_spec(spec: str) -> str:
     return spec
 
 
+#: Samples per task when the caller names no ``chunk_size``.
+DEFAULT_CHUNK_SIZE = 50
+
+
 class SweepOptions(TypedDict, total=False):
     """How a survey's chunks run: the keyword options `run_survey` passes to its sweep."""
 
@@ -272,7 +276,7 @@ def run_survey(
             Dask); ``progress`` (called as ``progress(finished_chunks, total_chunks)`` after
             each chunk).
     """
-    chunk_size = sweep.get("chunk_size", 50)
+    chunk_size = sweep.get("chunk_size", DEFAULT_CHUNK_SIZE)
     for name, value in (("samples", samples), ("chunk_size", chunk_size)):
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
             raise InputError(name, "a positive integer", value)
