@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import gc
 import time
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -175,7 +176,7 @@ def _tracker_rows(context: BenchContext, table: Table, n: int) -> None:
     fallbacks = sum(r.fallback == "cold" for r in tracked)
     robot = load_robot(f"chain:{n}", max_nv=None) if n <= 500 else None
     data = data_if_it_fits(robot) if robot is not None else None
-    rows = []
+    rows: list[dict[str, Any]] = []
     if data is None:
         lanczos, lanczos_us = _per_sample(
             lambda q: plain_lanczos_kappa(DenocModel.from_chain(chain_spec(n)).state(q)), qs[:3]

@@ -18,6 +18,7 @@ import warnings
 from collections.abc import Sequence
 from importlib import import_module  # bound now: tests may patch importlib
 from types import ModuleType
+from typing import NoReturn
 
 from gimwatch._version import __version__
 from gimwatch.cli._pipe import QuietPipe, discard_stdout
@@ -102,7 +103,7 @@ class _Parser(argparse.ArgumentParser):
         # prints a small negative qpos, was taken for an unknown option.
         self._negative_number_matcher = NEGATIVE_NUMBER
 
-    def error(self, message: str) -> None:  # one line, no usage dump
+    def error(self, message: str) -> NoReturn:  # one line, no usage dump
         if self.prog == "gimwatch" and "required: command" in message:  # `gimwatch` alone
             message = f"no command given (commands: {', '.join(COMMANDS)})"
         raise UsageError(f"{self.prog}: {message}; `{self.prog} --help` says more")

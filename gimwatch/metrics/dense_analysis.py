@@ -84,7 +84,7 @@ def check_massless(
     Raises:
         ConditioningError: ``source: M(q) of name is singular: ... (coordinates); remedy``.
     """
-    massless = [dof_names[k] for k in np.flatnonzero(~(np.asarray(diagonal) > 0))]
+    massless = [dof_names[int(k)] for k in np.flatnonzero(~(np.asarray(diagonal) > 0))]
     if massless:
         raise ConditioningError(
             f"{source}: M(q) of {name} is singular: "
@@ -134,11 +134,13 @@ def analysis_record(
     diag = state.diag
     if "kappa" in metrics:
         warn_if_ill_conditioned(values["kappa"], where=name)
-        lambda_min, lambda_max = state.extremes
-        spectrum = state.eigenvalues if state.linear is None else (lambda_min, lambda_max)
+        extremes: tuple[float, float] | tuple[None, None] = state.extremes
+        spectrum: np.ndarray | tuple[float, ...] = (
+            state.eigenvalues if state.linear is None else state.extremes
+        )
     else:
-        lambda_min = lambda_max = None
-        spectrum = ()
+        extremes, spectrum = (None, None), ()
+    lambda_min, lambda_max = extremes
     return GimAnalysis(
         robot=name,
         nv=nv,

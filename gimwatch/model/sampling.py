@@ -137,8 +137,10 @@ def random_configurations(robot: Robot, count: int = 1, *, seed: int | None = No
     model = robot.model
     lower = np.array(model.lowerPositionLimit, dtype=float)
     upper = np.array(model.upperPositionLimit, dtype=float)
-    boxes, units = [], []  # the coordinates drawn in a box, and the unit blocks
-    lows, highs = [], []
+    boxes: list[int] = []  # the coordinates drawn in a box
+    units: list[slice] = []  # the unit blocks
+    lows: list[np.ndarray] = []
+    highs: list[np.ndarray] = []
     for joint in model.joints[1:]:
         start, stop = joint.idx_q, joint.idx_q + joint.nq
         unit = unit_block_size(joint)

@@ -72,7 +72,7 @@ class Effect:
 
     name: ClassVar[str]
     parameters: ClassVar[tuple[Parameter, ...]] = ()
-    uses_velocity: ClassVar[bool] = False
+    uses_velocity: bool = False
     conservative: ClassVar[bool] = False
     adds_torque: ClassVar[bool] = True
 

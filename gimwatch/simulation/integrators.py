@@ -294,7 +294,8 @@ def _scipy(method: str) -> type[ScipyIntegrator]:
             "__module__": __name__,
         },
     )
-    return register(cls)
+    register(cls)
+    return cls
 
 
 RK45 = _scipy("RK45")
