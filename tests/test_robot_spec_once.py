@@ -243,3 +243,16 @@ def test_scene_robot_parses_and_loads_once(robot: str) -> None:
     assert passes.parses <= 1 and passes.loads == 1, (passes.parses, dict(passes.spec_entries))
     assert sum(passes.spec_entries.values()) == 1
     assert loaded.robot_spec is not None and loaded.robot_spec.text == robot
+
+
+def test_crosscheck_robot_takes_text_and_loads_once() -> None:
+    """The library's cross-check of a robot's text parses and loads it once, like the CLI."""
+    from gimwatch.crosscheck import crosscheck_robot
+    from gimwatch.model.robots import load_robot
+
+    _fresh_caches()
+    with Passes() as passes:
+        from_text = crosscheck_robot("chain:4", samples=2)
+    _assert_once(passes)
+    from_robot = crosscheck_robot(load_robot("chain:4"), samples=2)
+    assert from_text.passed and from_text.gim_rel_err == from_robot.gim_rel_err

@@ -31,6 +31,8 @@ sample, MuJoCo's peer) and the accumulator of the worst errors and the verdict
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from gimwatch.crosscheck.accumulator import CrossCheckResult, ErrorAccumulator
@@ -39,7 +41,8 @@ from gimwatch.crosscheck.subjects import State, Subjects, choose_subjects
 from gimwatch.metrics.conditioning import warn_if_ill_conditioned
 from gimwatch.metrics.denoc_robot import denoc_model
 from gimwatch.model.example_robots import EXAMPLE_ROBOT_NOTES
-from gimwatch.model.robots import Robot
+from gimwatch.model.robot_spec import RobotSpec
+from gimwatch.model.robots import Robot, load_robot
 from gimwatch.model.sampling import (
     placeholder_limit_joints,
     placeholder_note,
@@ -58,7 +61,7 @@ DEFAULT_TOLERANCE = 1e-10
 
 
 def crosscheck_robot(
-    robot: Robot,
+    robot: Robot | RobotSpec | str | Path,
     *,
     samples: int = 10,
     seed: int = 0,
@@ -76,7 +79,8 @@ def crosscheck_robot(
     stand-ins' velocity-product terms differ), and ``peer`` defaults to ``"mujoco"``.
 
     Args:
-        robot: The robot (fixed or floating base, as loaded).
+        robot: The robot (fixed or floating base, as loaded), or its `RobotSpec` or text
+            (parsed and loaded once, with the robot's own base).
         samples: Number of random states, >= 1.
         seed: Seed of the configurations and of v, a, τ.
         tolerance: Largest relative error that passes.
@@ -87,6 +91,8 @@ def crosscheck_robot(
         URDFError: Pinocchio's M(q) is not finite (an overflow in the model).
         MujocoRefusal: MuJoCo refuses an inertia of the robot (the link is named).
     """
+    if not isinstance(robot, Robot):
+        robot = load_robot(robot)
     acc = ErrorAccumulator(check_tolerance(tolerance))
     reference = PinocchioReference(robot)
     chosen = choose_subjects(robot, reference, peer)
