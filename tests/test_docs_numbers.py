@@ -774,9 +774,11 @@ def test_long_chain_prose_is_the_committed_runs():
         round(float(dense["lambda_min"]), 4),
         round(float(free["kappa_over_4n4"]), 3),
         round(float(free["lambda_min"]), 4),
-        round(float(free["seconds"]), 1),
+        float(f"{float(free['seconds']):.2g}"),
         round(float(dense["seconds"]), 1),
     ]
+    products = _find(page, r"\((\d+) products of the tracker's engine, both ends certified\)")
+    assert int(products.group(1)) == int(free["products"])
     converged = {
         round(float(r["lambda_min"]), 4)
         for (n, route), r in kappa.items()
