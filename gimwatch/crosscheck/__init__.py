@@ -1,8 +1,8 @@
 """Cross-check of the DeNOC implementation against Pinocchio, robot by robot.
 
 At K seeded random states (q within the joint limits from
-[`random_configurations`][gimwatch.model.robots.random_configurations]; v, a, τ standard normal from
-a NumPy generator with the same seed) it compares
+[`random_configurations`][gimwatch.model.sampling.random_configurations]; v, a, τ standard
+normal from a NumPy generator with the same seed) it compares
 
 * the GIM with ``pinocchio.crba`` (and its O(n) diagonal),
 * τ with ``pinocchio.rnea``,
